@@ -1,0 +1,78 @@
+"""Case files: a TOML file plus command-line overrides, checked before any computation.
+
+A case is a nested dict of TOML tables ([geometry.mp], [material], [mesh],
+[friction], [damping], [loading], [[schedule]], ...). Overrides use dotted keys,
+``--set friction.mu_s=0.3 --set mesh.n_circumferential=24``; the value is read as
+TOML (numbers, booleans, strings, arrays), and a bare word as a string. Each
+table is turned into a typed object by its owner's ``from_dict`` through
+:func:`construct`, which names the table and key of any problem.
+"""
+
+from __future__ import annotations
+
+import copy
+import tomllib
+from dataclasses import fields
+from pathlib import Path
+from typing import Any
+
+CASES_DIR = Path(__file__).resolve().parent.parent / "cases"
+DEFAULT_CASE = CASES_DIR / "scaled.toml"
+
+
+def resolve_case_path(name: str | Path) -> Path:
+    """A case file path, or the name of a file in ``cases/`` (``scaled``, ``full_scale``)."""
+    path = Path(name)
+    if path.is_file():
+        return path
+    preset = CASES_DIR / f"{path.stem}.toml"
+    if preset.is_file():
+        return preset
+    known = sorted(p.stem for p in CASES_DIR.glob("*.toml"))
+    raise ValueError(f"case file {str(name)!r} not found (and no preset of that name; presets: {known})")
+
+
+def read_case(name: str | Path = DEFAULT_CASE, overrides: list[str] | None = None) -> dict[str, Any]:
+    """Read a TOML case file and apply ``key.path=value`` overrides."""
+    path = resolve_case_path(name)
+    try:
+        with path.open("rb") as f:
+            case = tomllib.load(f)
+    except tomllib.TOMLDecodeError as e:
+        raise ValueError(f"{path}: invalid TOML: {e}") from None
+    for item in overrides or []:
+        apply_override(case, item)
+    case["_source"] = str(path)
+    return case
+
+
+def apply_override(case: dict[str, Any], item: str) -> None:
+    """Set ``a.b.c=value`` in the nested dict ``case`` (in place)."""
+    key, sep, text = item.partition("=")
+    keys = key.strip().split(".")
+    if not sep or not all(keys):
+        raise ValueError(f"override {item!r} is not of the form section.key=value")
+    try:
+        value = tomllib.loads(f"v = {text.strip()}")["v"]
+    except tomllib.TOMLDecodeError:
+        value = text.strip()
+    table = case
+    for k in keys[:-1]:
+        table = table.setdefault(k, {})
+        if not isinstance(table, dict):
+            raise ValueError(f"override {item!r}: {k!r} is not a table")
+    table[keys[-1]] = value
+
+
+def construct(cls: type, data: dict[str, Any], name: str) -> Any:
+    """``cls(**data)`` for a dataclass, with errors that name the table and the offending keys."""
+    known = {f.name for f in fields(cls)}
+    unknown = set(data) - known
+    if unknown:
+        raise ValueError(f"[{name}] has unknown key(s) {sorted(unknown)}; expected some of {sorted(known)}")
+    try:
+        return cls(**copy.deepcopy(data))
+    except TypeError as e:  # missing required keys or wrong types
+        raise ValueError(f"[{name}] {e}") from None
+    except ValueError as e:
+        raise ValueError(f"[{name}] {e}") from None
