@@ -1,0 +1,246 @@
+"""Structured hexahedral gmsh meshes of the MP and TP walls, brought into DOLFINx.
+
+Each part's (r, z) wall profile -- one quadrilateral per axial segment (straight
+part, cone) -- is meshed as a structured quad grid (``n_layers`` through the
+wall, ``axial_size`` along the axis) and revolved about the z axis in four
+quarter turns with ``n_circumferential / 4`` recombined layers each, giving
+hexahedra through the wall. ``geometry_order = 2`` gives hex27 cells whose
+high-order nodes lie on the exact circles. Tags: :mod:`geometry.tags`.
+
+gmsh runs on rank 0 only; :func:`dolfinx.io.gmsh.model_to_mesh` distributes.
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Callable, Mapping
+from dataclasses import dataclass
+from pathlib import Path
+
+import gmsh
+import numpy as np
+import numpy.typing as npt
+from mpi4py import MPI
+
+import dolfinx
+import dolfinx.io.gmsh
+
+from geometry import tags
+from geometry.parameters import ConePart, JointGeometry, MeshOptions
+
+__all__ = [
+    "MeshOptions",
+    "RadialDeviation",
+    "build_joint_model",
+    "build_tube_model",
+    "create_joint_mesh",
+    "create_tube_mesh",
+    "write_paraview",
+]
+
+#: radial deviation [m] of a part's wall as a function of (angle [rad], part-local z [m])
+RadialDeviation = Callable[[npt.NDArray[np.float64], npt.NDArray[np.float64]], npt.NDArray[np.float64]]
+
+
+@dataclass(frozen=True)
+class _PartEntities:
+    """gmsh entity tags of one revolved part, by role."""
+
+    volumes: list[int]
+    bottom: list[int]  #: annulus at the lower end
+    top: list[int]  #: annulus at the upper end
+    outer: list[int]  #: outer lateral surfaces, per segment (bottom to top), concatenated
+    inner: list[int]
+    outer_cone: list[int]
+    inner_cone: list[int]
+
+
+def _add_part(part: ConePart, z0: float, options: MeshOptions) -> _PartEntities:
+    """Add one part, lower end at global height ``z0`` [m], to the current gmsh model (geo)."""
+    geo = gmsh.model.geo
+    heights = part.profile_heights()
+    outer_pts = [geo.addPoint(float(part.outer_radius(h)), 0.0, z0 + h) for h in heights]
+    inner_pts = [geo.addPoint(float(part.inner_radius(h)), 0.0, z0 + h) for h in heights]
+    radial = [geo.addLine(i, o) for i, o in zip(inner_pts, outer_pts)]
+    for line in radial:
+        geo.mesh.setTransfiniteCurve(line, options.n_layers + 1)
+
+    profile, is_cone = [], []
+    for k in range(len(heights) - 1):
+        n = options.n_axial(heights[k + 1] - heights[k]) + 1
+        outer = geo.addLine(outer_pts[k], outer_pts[k + 1])
+        inner = geo.addLine(inner_pts[k], inner_pts[k + 1])
+        geo.mesh.setTransfiniteCurve(outer, n)
+        geo.mesh.setTransfiniteCurve(inner, n)
+        loop = geo.addCurveLoop([radial[k], outer, -radial[k + 1], -inner])
+        surface = geo.addPlaneSurface([loop])
+        geo.mesh.setTransfiniteSurface(surface)
+        geo.mesh.setRecombine(2, surface)
+        profile.append(surface)
+        mid = 0.5 * (heights[k] + heights[k + 1])
+        is_cone.append(part.cone_bottom_z <= mid <= part.cone_top_z)
+
+    entities = _PartEntities([], [], [], [], [], [], [])
+    sources = [(2, s) for s in profile]
+    for _ in range(4):
+        out = geo.revolve(sources, 0, 0, 0, 0, 0, 1, math.pi / 2,
+                          numElements=[options.n_circumferential // 4], recombine=True)
+        # per source surface: [end surface, volume, laterals of radial_k, outer, radial_k+1, inner]
+        sources = []
+        for k in range(len(profile)):
+            end, vol, lat_bottom, lat_outer, lat_top, lat_inner = out[6 * k: 6 * k + 6]
+            sources.append(end)
+            entities.volumes.append(vol[1])
+            entities.outer.append(lat_outer[1])
+            entities.inner.append(lat_inner[1])
+            if is_cone[k]:
+                entities.outer_cone.append(lat_outer[1])
+                entities.inner_cone.append(lat_inner[1])
+            if k == 0:
+                entities.bottom.append(lat_bottom[1])
+            if k == len(profile) - 1:
+                entities.top.append(lat_top[1])
+    return entities
+
+
+def _close_revolutions() -> None:
+    """Merge each part's last quarter with its first (coincident profile entities)."""
+    gmsh.model.geo.removeAllDuplicates()
+    gmsh.model.geo.synchronize()
+
+
+def _apply_deviation(volumes: list[int], z0: float, deviation: RadialDeviation) -> None:
+    """Move every node of the part's volumes radially by ``deviation(theta, z - z0)``."""
+    node_tags, coords = [], []
+    for v in volumes:
+        t, x, _ = gmsh.model.mesh.getNodes(3, v, includeBoundary=True)
+        node_tags.append(t)
+        coords.append(np.reshape(x, (-1, 3)))
+    node_tags_all, first = np.unique(np.concatenate(node_tags), return_index=True)
+    x = np.concatenate(coords)[first]
+    r = np.hypot(x[:, 0], x[:, 1])
+    theta = np.arctan2(x[:, 1], x[:, 0])
+    dr = np.asarray(deviation(theta, x[:, 2] - z0), dtype=np.float64)
+    scale = (r + dr) / r
+    x[:, 0] *= scale
+    x[:, 1] *= scale
+    for tag, xi in zip(node_tags_all, x):
+        gmsh.model.mesh.setNode(int(tag), xi.tolist(), [])
+
+
+def _generate(options: MeshOptions) -> None:
+    gmsh.option.setNumber("Mesh.SecondOrderIncomplete", 0)
+    gmsh.model.mesh.generate(3)
+    if options.geometry_order > 1:
+        gmsh.model.mesh.setOrder(options.geometry_order)
+
+
+def _checked(imperfections: Mapping[str, RadialDeviation] | None) -> dict[str, RadialDeviation]:
+    imperfections = dict(imperfections or {})
+    unknown = set(imperfections) - {"mp", "tp"}
+    if unknown:
+        raise ValueError(f"imperfections keys must be 'mp' and/or 'tp', got {sorted(unknown)}")
+    return imperfections
+
+
+def build_joint_model(
+    joint: JointGeometry,
+    options: MeshOptions,
+    imperfections: Mapping[str, RadialDeviation] | None = None,
+) -> None:
+    """Populate the current gmsh model with the meshed MP and TP (TP at first contact).
+
+    ``imperfections`` maps ``"mp"`` and/or ``"tp"`` to a radial deviation
+    ``f(theta [rad], part-local z [m]) -> dr [m]`` applied to all nodes of that
+    part (the whole wall moves, the thickness is kept).
+    """
+    imperfections = _checked(imperfections)
+    mp = _add_part(joint.mp, 0.0, options)
+    tp = _add_part(joint.tp, joint.tp_offset, options)
+    _close_revolutions()
+    groups = {
+        tags.MP_VOLUME: (3, mp.volumes),
+        tags.TP_VOLUME: (3, tp.volumes),
+        tags.MP_CLAMPED: (2, mp.bottom),
+        tags.TP_TOP: (2, tp.top),
+        tags.MP_CONTACT: (2, mp.outer_cone),
+        tags.TP_CONTACT: (2, tp.inner_cone),
+    }
+    for tag, (dim, entities) in groups.items():
+        gmsh.model.addPhysicalGroup(dim, entities, tag, name=tags.JOINT_NAMES[tag])
+    _generate(options)
+    for name, part, z0 in (("mp", mp, 0.0), ("tp", tp, joint.tp_offset)):
+        if name in imperfections:
+            _apply_deviation(part.volumes, z0, imperfections[name])
+
+
+def build_tube_model(part: ConePart, options: MeshOptions) -> None:
+    """Populate the current gmsh model with one meshed part, lower end at z = 0."""
+    entities = _add_part(part, 0.0, options)
+    _close_revolutions()
+    groups = {
+        tags.VOLUME: (3, entities.volumes),
+        tags.BOTTOM: (2, entities.bottom),
+        tags.TOP: (2, entities.top),
+        tags.OUTER: (2, entities.outer),
+        tags.INNER: (2, entities.inner),
+    }
+    for tag, (dim, ents) in groups.items():
+        gmsh.model.addPhysicalGroup(dim, ents, tag, name=tags.TUBE_NAMES[tag])
+    _generate(options)
+
+
+def _to_dolfinx(comm: MPI.Comm, build: Callable[[], None], name: str) -> dolfinx.io.gmsh.MeshData:
+    """Run ``build`` on rank 0 in a fresh gmsh model and distribute the mesh."""
+    rank = 0
+    started = False
+    if comm.rank == rank:
+        if not gmsh.isInitialized():
+            gmsh.initialize()
+            started = True
+        gmsh.option.setNumber("General.Terminal", 0)
+        gmsh.model.add(name)
+        try:
+            build()
+        except Exception:
+            gmsh.model.remove()
+            if started:
+                gmsh.finalize()
+            raise
+    mesh_data = dolfinx.io.gmsh.model_to_mesh(gmsh.model, comm, rank, gdim=3)
+    if comm.rank == rank:
+        gmsh.model.remove()
+        if started:
+            gmsh.finalize()
+    mesh_data.mesh.name = name
+    return mesh_data
+
+
+def create_joint_mesh(
+    comm: MPI.Comm,
+    joint: JointGeometry,
+    options: MeshOptions,
+    imperfections: Mapping[str, RadialDeviation] | None = None,
+) -> dolfinx.io.gmsh.MeshData:
+    """DOLFINx mesh of MP and TP (TP at first contact) with cell and facet tags."""
+    _checked(imperfections)  # on every rank, before rank 0 enters gmsh
+    return _to_dolfinx(comm, lambda: build_joint_model(joint, options, imperfections), "slipjoint")
+
+
+def create_tube_mesh(comm: MPI.Comm, part: ConePart, options: MeshOptions) -> dolfinx.io.gmsh.MeshData:
+    """DOLFINx mesh of one part alone (lower end at z = 0), tags as in :mod:`geometry.tags`."""
+    return _to_dolfinx(comm, lambda: build_tube_model(part, options), "tube")
+
+
+def write_paraview(mesh_data: dolfinx.io.gmsh.MeshData, path: str | Path) -> Path:
+    """Write mesh, cell tags and facet tags to an XDMF file for ParaView; returns its path."""
+    path = Path(path).with_suffix(".xdmf")
+    mesh = mesh_data.mesh
+    mesh.topology.create_connectivity(mesh.topology.dim - 1, mesh.topology.dim)
+    with dolfinx.io.XDMFFile(mesh.comm, path, "w") as xdmf:
+        xdmf.write_mesh(mesh)
+        mesh_data.cell_tags.name = "cell_tags"
+        mesh_data.facet_tags.name = "facet_tags"
+        xdmf.write_meshtags(mesh_data.cell_tags, mesh.geometry)
+        xdmf.write_meshtags(mesh_data.facet_tags, mesh.geometry)
+    return path
