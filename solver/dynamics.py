@@ -1,0 +1,312 @@
+"""Time loop of the linear structure with (optional) frictional contact.
+
+Semi-discrete balance (SI units: u in m, forces in N, t in s)
+
+    M a + C v + K u + r_c(u) = f(t),
+
+integrated by a scheme of ``solver.newmark`` (Newmark average acceleration by default,
+generalised-alpha, or quasi-static). Each step solves the effective system
+
+    A u_{n+1} + r_c(u_{n+1}) = b,    A = K + c_M M + c_C C_Rayleigh,
+
+with a reused LU factorisation of A when there is no contact, and with
+``solve_contact_problem(A, b, contact, u, bcs)`` (semismooth Newton) when there is.
+Modal damping is low rank and enters b explicitly through the Newmark-predicted
+velocity v_n + (1 - alpha_f) dt a_n (error O(dt^2), see ``solver.damping``).
+Dirichlet conditions must be homogeneous (clamped boundaries).
+"""
+
+import csv
+import pathlib
+from collections.abc import Callable, Sequence
+from dataclasses import dataclass, field
+
+import numpy as np
+import ufl
+from mpi4py import MPI
+from petsc4py import PETSc
+
+from dolfinx import fem
+from dolfinx.fem import petsc as fem_petsc
+
+from solver.damping import ModalDamping, RayleighDamping
+from solver.elasticity import Material, epsilon, sigma
+from solver.newmark import GeneralisedAlpha, Scheme
+
+Load = Callable[[float, PETSc.Vec], None]  #: load(t, out): write the load vector f(t) [N] into out
+
+
+def assemble_structure(V: fem.FunctionSpace, material: Material, bcs: Sequence[fem.DirichletBC],
+                       extra_stiffness: ufl.Form | None = None) -> tuple[PETSc.Mat, PETSc.Mat]:
+    """Mass M [kg] and stiffness K [N/m] of linear elasticity on V (bc rows: identity)."""
+    u, w = ufl.TrialFunction(V), ufl.TestFunction(V)
+    k = ufl.inner(sigma(u, material), epsilon(w)) * ufl.dx
+    if extra_stiffness is not None:
+        k = k + extra_stiffness
+    m = material.rho * ufl.inner(u, w) * ufl.dx
+    K = fem_petsc.assemble_matrix(fem.form(k), bcs=bcs)
+    K.assemble()
+    M = fem_petsc.assemble_matrix(fem.form(m), bcs=bcs)
+    M.assemble()
+    return M, K
+
+
+@dataclass
+class StepResult:
+    """Outcome of one attempted time step."""
+
+    converged: bool
+    iterations: int = 0  #: Newton iterations (0 for a linear step)
+    residual_norms: list[float] = field(default_factory=list)
+
+
+def _lu_solver(comm: MPI.Comm, A: PETSc.Mat, prefix: str) -> PETSc.KSP:
+    ksp = PETSc.KSP().create(comm)
+    ksp.setOptionsPrefix(prefix)
+    ksp.setType("preonly")
+    pc = ksp.getPC()
+    pc.setType("lu")
+    pc.setFactorSolverType("mumps")
+    ksp.setFromOptions()
+    ksp.setOperators(A)
+    return ksp
+
+
+class Elastodynamics:
+    """State (u, v, a) at time t and the step u_n -> u_{n+1} of a Newmark-family scheme."""
+
+    def __init__(self, V: fem.FunctionSpace, M: PETSc.Mat, K: PETSc.Mat, bcs: Sequence[fem.DirichletBC],
+                 load: Load | None = None, scheme: Scheme = GeneralisedAlpha(),
+                 damping: RayleighDamping | ModalDamping | None = None, contact=None,
+                 newton: Callable | None = None, newton_options: dict | None = None):
+        self.V, self.M, self.K, self.bcs = V, M, K, list(bcs)
+        self.scheme, self.damping, self.contact = scheme, damping, contact
+        self.load = load
+        self.newton_options = dict(newton_options or {})
+        if contact is not None and newton is None:
+            from solver.nonlinear import solve_contact_problem as newton
+        self.newton = newton
+        self.u, self.v, self.a = (fem.Function(V, name=n) for n in ("displacement", "velocity", "acceleration"))
+        self.t = 0.0
+        self._bc_dofs = self._homogeneous_bc_dofs()
+        self._f_old, self._f_new = K.createVecLeft(), K.createVecLeft()
+        self._b, self._work = K.createVecLeft(), K.createVecLeft()
+        self._r_contact_old = K.createVecLeft()  # r_c(u_n), used when alpha_f > 0
+        self.A = K.duplicate(copy=True)
+        self._dt_of_A = None
+        self._ksp = _lu_solver(V.mesh.comm, self.A, "dynamics_")
+        self._evaluate_load(0.0, self._f_old)
+
+    def _homogeneous_bc_dofs(self) -> np.ndarray:
+        probe = self.K.createVecLeft()
+        probe.set(0.0)
+        fem_petsc.set_bc(probe, self.bcs)
+        if probe.norm() > 0:
+            raise ValueError("Elastodynamics supports homogeneous Dirichlet conditions (clamped boundaries) only")
+        probe.set(1.0)
+        fem_petsc.set_bc(probe, self.bcs, alpha=0.0)
+        return np.flatnonzero(probe.array_r == 0.0).astype(np.int32)  # owned bc dofs
+
+    def _evaluate_load(self, t: float, out: PETSc.Vec) -> None:
+        out.set(0.0)
+        if self.load is not None:
+            self.load(t, out)
+
+    def _assemble_operator(self, dt: float) -> None:
+        """A = K + c_M M + c_C (a M + b K), factorised lazily by the KSP."""
+        if self._dt_of_A == dt:
+            return
+        c_M, c_C = self.scheme.coefficients(dt)
+        a_R, b_R = (self.damping.a, self.damping.b) if isinstance(self.damping, RayleighDamping) else (0.0, 0.0)
+        self.K.copy(self.A, structure=PETSc.Mat.Structure.SAME_NONZERO_PATTERN)
+        self.A.scale(1.0 + c_C * b_R)
+        self.A.axpy(c_M + c_C * a_R, self.M, structure=PETSc.Mat.Structure.SUBSET_NONZERO_PATTERN)
+        self._ksp.setOperators(self.A)
+        self._dt_of_A = dt
+
+    def initialise(self, t0: float = 0.0) -> None:
+        """Set t = t0 and the consistent initial acceleration M a0 = f(t0) - K u0 - C v0 - r_c(u0)."""
+        self.t = t0
+        self._evaluate_load(t0, self._f_old)
+        self.a.x.petsc_vec.set(0.0)
+        if not self.scheme.dynamic:
+            return
+        rhs = self._f_old.copy()
+        self._internal_force(self.u.x.petsc_vec, self.v.x.petsc_vec, rhs, scale=-1.0)
+        if self.contact is not None:
+            self.contact.set_reference(self.u, 1.0)
+            self.contact.update(self.u)
+            self._r_contact_old = self.contact.residual().copy()
+            rhs.axpy(-1.0, self._r_contact_old)
+        rhs.array_w[self._bc_dofs] = 0.0
+        ksp = _lu_solver(self.V.mesh.comm, self.M, "dynamics_mass_")
+        ksp.solve(rhs, self.a.x.petsc_vec)
+        ksp.destroy()
+        self.a.x.scatter_forward()
+
+    def _internal_force(self, u: PETSc.Vec, v: PETSc.Vec, out: PETSc.Vec, scale: float) -> None:
+        """out += scale (K u + C v)."""
+        self.K.mult(u, self._work)
+        out.axpy(scale, self._work)
+        if isinstance(self.damping, RayleighDamping):
+            self.M.mult(v, self._work)
+            out.axpy(scale * self.damping.a, self._work)
+            self.K.mult(v, self._work)
+            out.axpy(scale * self.damping.b, self._work)
+        elif isinstance(self.damping, ModalDamping):
+            self._work.set(0.0)
+            self.damping.mult(v, self._work)
+            out.axpy(scale, self._work)
+
+    def _effective_load(self, dt: float) -> None:
+        """b = (f_{n+1-alpha_f} - alpha_f r_c,n - M a_hat - C v_hat - K u_hat) / (1 - alpha_f)."""
+        af = self.scheme.alpha_f
+        u, v, a = (x.x.petsc_vec.array_r for x in (self.u, self.v, self.a))
+        a_hat, v_hat, u_hat = self.scheme.history(u, v, a, dt)
+        b = self._b
+        b.set(0.0)
+        b.axpy(1.0 - af, self._f_new)
+        b.axpy(af, self._f_old)
+        if af:
+            b.axpy(-af, self._r_contact_old)
+        hist = self.K.createVecRight()
+        if self.scheme.dynamic:
+            hist.array_w[:] = a_hat
+            self.M.mult(hist, self._work)
+            b.axpy(-1.0, self._work)
+            hist.array_w[:] = v_hat
+            if isinstance(self.damping, RayleighDamping):
+                self.M.mult(hist, self._work)
+                b.axpy(-self.damping.a, self._work)
+                self.K.mult(hist, self._work)
+                b.axpy(-self.damping.b, self._work)
+            elif isinstance(self.damping, ModalDamping):
+                hist.array_w[:] = v + (1.0 - af) * dt * a  # predicted v_{n+1-alpha_f}
+                self._work.set(0.0)
+                self.damping.mult(hist, self._work)
+                b.axpy(-1.0, self._work)
+        if af:
+            hist.array_w[:] = u_hat
+            self.K.mult(hist, self._work)
+            b.axpy(-1.0, self._work)
+        hist.destroy()
+        b.scale(1.0 / (1.0 - af))
+        b.array_w[self._bc_dofs] = 0.0
+
+    def step(self, dt: float) -> StepResult:
+        """Advance by dt [s]; on Newton failure the state is left unchanged."""
+        if isinstance(self.damping, ModalDamping):
+            self.damping.check_step(dt)
+        self._evaluate_load(self.t + dt, self._f_new)
+        self._assemble_operator(dt)
+        self._effective_load(dt)
+        u_old = self.u.x.array.copy()
+        if self.contact is None:
+            self._ksp.solve(self._b, self.u.x.petsc_vec)
+            result = StepResult(converged=self._ksp.getConvergedReason() > 0)
+        else:
+            self.contact.set_reference(self.u, dt)
+            res = self.newton(self.A, self._b, self.contact, self.u, self.bcs, **self.newton_options)
+            result = StepResult(bool(res.converged), int(res.iterations), list(res.residual_norms))
+        if not result.converged:
+            self.u.x.array[:] = u_old
+            return result
+        self.u.x.scatter_forward()
+        v_new, a_new = self.scheme.update(self.u.x.array, u_old, self.v.x.array, self.a.x.array, dt)
+        self.v.x.array[:], self.a.x.array[:] = v_new, a_new
+        if self.contact is not None and self.scheme.alpha_f:
+            self.contact.update(self.u)
+            self.contact.residual().copy(self._r_contact_old)
+        self._f_new.copy(self._f_old)
+        self.t += dt
+        return result
+
+    def energy(self) -> tuple[float, float]:
+        """(kinetic 1/2 v.Mv, strain 1/2 u.Ku) [J]."""
+        u, v = self.u.x.petsc_vec, self.v.x.petsc_vec
+        self.M.mult(v, self._work)
+        kinetic = 0.5 * v.dot(self._work)
+        self.K.mult(u, self._work)
+        return kinetic, 0.5 * u.dot(self._work)
+
+
+class CsvWriter:
+    """History file written as the run goes (rank 0 only), flushed after every row."""
+
+    def __init__(self, path: str | pathlib.Path, columns: Sequence[str], comm: MPI.Comm):
+        self.columns = list(columns)
+        self._file = None
+        if comm.rank == 0:
+            path = pathlib.Path(path)
+            path.parent.mkdir(parents=True, exist_ok=True)
+            self._file = open(path, "w", newline="")
+            self._writer = csv.writer(self._file)
+            self._writer.writerow(self.columns)
+            self._file.flush()
+
+    def write(self, row: dict[str, float]) -> None:
+        if self._file is not None:
+            self._writer.writerow([f"{row[c]:.10g}" for c in self.columns])
+            self._file.flush()
+
+    def close(self) -> None:
+        if self._file is not None:
+            self._file.close()
+
+
+Observer = Callable[[Elastodynamics], dict[str, float]]
+
+
+def run(problem: Elastodynamics, t_end: float, dt: float, dt_min: float | None = None,
+        observers: Sequence[Observer] = (), csv_path: str | pathlib.Path | None = None,
+        progress: bool = True, growth_after: int = 4) -> list[dict[str, float]]:
+    """Integrate from problem.t to t_end [s] with nominal step dt [s].
+
+    On Newton failure the step is halved and retried; after ``growth_after`` accepted
+    steps it doubles again (up to dt). Below dt_min (default dt/64) a RuntimeError
+    names the time and step. Each accepted step records time_s, dt_s, newton_iterations
+    and every observer's values (keys carry units, e.g. settlement_mm); rows go to the
+    CSV file as they are produced. Returns the rows.
+    """
+    if not (t_end > problem.t and dt > 0):
+        raise ValueError(f"need t_end > t = {problem.t} s and dt > 0, got t_end={t_end} s, dt={dt} s")
+    dt_min = dt / 64 if dt_min is None else dt_min
+    if not 0 < dt_min <= dt:
+        raise ValueError(f"need 0 < dt_min <= dt, got dt_min={dt_min} s, dt={dt} s")
+    comm = problem.V.mesh.comm
+    bar = None
+    if progress and comm.rank == 0:
+        from tqdm import tqdm
+        bar = tqdm(total=t_end - problem.t, unit="s", bar_format="{l_bar}{bar}| {n:.4g}/{total:.4g} s {postfix}")
+    rows, writer, h, accepted = [], None, dt, 0
+    try:
+        while problem.t < t_end - 1e-12 * t_end:
+            step = min(h, t_end - problem.t)
+            result = problem.step(step)
+            if not result.converged:
+                h = step / 2
+                accepted = 0
+                if h < dt_min:
+                    raise RuntimeError(f"Newton did not converge at t = {problem.t:.6g} s even with dt = {step:.3g} s "
+                                       f"(minimum step {dt_min:.3g} s); last residuals {result.residual_norms[-3:]}")
+                continue
+            row = {"time_s": problem.t, "dt_s": step, "newton_iterations": result.iterations}
+            for observe in observers:
+                row.update(observe(problem))
+            rows.append(row)
+            if writer is None and csv_path is not None:
+                writer = CsvWriter(csv_path, list(row), comm)
+            if writer is not None:
+                writer.write(row)
+            if bar is not None:
+                bar.update(step)
+                bar.set_postfix({k: f"{v:.4g}" for k, v in row.items() if k != "time_s"}, refresh=False)
+            accepted += 1
+            if h < dt and accepted >= growth_after:
+                h, accepted = min(2 * h, dt), 0
+    finally:
+        if writer is not None:
+            writer.close()
+        if bar is not None:
+            bar.close()
+    return rows

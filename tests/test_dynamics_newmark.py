@@ -1,0 +1,203 @@
+"""Newmark-family integration of a small clamped steel beam against its modal solution.
+
+Reference: the lowest bending mode (SLEPc, shift-invert) as initial displacement;
+the exact undamped response is phi cos(omega t), the damped one decays with the
+prescribed ratio zeta.
+"""
+
+import numpy as np
+import pytest
+from mpi4py import MPI
+from petsc4py import PETSc
+from slepc4py import SLEPc
+
+from dolfinx import fem, mesh
+from dolfinx.fem.petsc import set_bc
+
+from solver.damping import ModalDamping, RayleighDamping
+from solver.dynamics import Elastodynamics, assemble_structure, run
+from solver.elasticity import Material
+from solver.newmark import GeneralisedAlpha, QuasiStatic
+
+pytestmark = pytest.mark.mpi
+
+STEEL = Material()
+
+
+@pytest.fixture(scope="module")
+def beam():
+    """Cantilever 1.0 x 0.1 x 0.1 m, clamped at x = 0, trilinear hexahedra."""
+    domain = mesh.create_box(MPI.COMM_WORLD, [[0, 0, 0], [1.0, 0.1, 0.1]], [8, 2, 2],
+                             cell_type=mesh.CellType.hexahedron)
+    V = fem.functionspace(domain, ("Lagrange", 1, (3,)))
+    clamped = fem.locate_dofs_geometrical(V, lambda x: np.isclose(x[0], 0.0))
+    bcs = [fem.dirichletbc(np.zeros(3), clamped, V)]
+    M, K = assemble_structure(V, STEEL, bcs)
+    return V, M, K, bcs
+
+
+def lowest_modes(K: PETSc.Mat, M: PETSc.Mat, bcs, n: int):
+    """n lowest (omega [rad/s], M-normalised mode) pairs of K phi = omega^2 M phi.
+
+    The clamped rows are identity in K and M; the eigenproblem uses M with zero
+    clamped rows instead, which sends those spurious eigenvalues to infinity.
+    """
+    clamped = M.createVecLeft()
+    clamped.set(0.0)
+    ones = M.createVecLeft()
+    ones.set(-1.0)
+    set_bc(clamped, bcs, x0=ones)  # clamped rows = 0 - (-1) = 1
+    M0 = M.copy()
+    diagonal = M0.getDiagonal()
+    diagonal.axpy(-1.0, clamped)
+    M0.setDiagonal(diagonal)
+    eps = SLEPc.EPS().create(K.getComm())
+    eps.setOperators(K, M0)
+    eps.setProblemType(SLEPc.EPS.ProblemType.GHEP)
+    eps.setDimensions(n)
+    eps.setWhichEigenpairs(SLEPc.EPS.Which.TARGET_MAGNITUDE)
+    eps.setTarget(0.0)
+    st = eps.getST()
+    st.setType(SLEPc.ST.Type.SINVERT)
+    st.getKSP().setType("preonly")
+    st.getKSP().getPC().setType("lu")
+    st.getKSP().getPC().setFactorSolverType("mumps")
+    eps.setTolerances(1e-12, 200)
+    eps.solve()
+    assert eps.getConverged() >= n
+    pairs = []
+    for i in range(n):
+        phi = K.createVecRight()
+        eps.getEigenvector(i, phi)
+        y = M.createVecLeft()
+        M.mult(phi, y)
+        phi.scale(1 / np.sqrt(phi.dot(y)))
+        pairs.append((np.sqrt(eps.getEigenvalue(i).real), phi))
+    return sorted(pairs, key=lambda p: p[0])
+
+
+@pytest.fixture(scope="module")
+def modes(beam):
+    V, M, K, bcs = beam
+    return lowest_modes(K, M, bcs, 3)
+
+
+def start_in_mode(V, M, K, bcs, phi, scheme, damping=None) -> Elastodynamics:
+    problem = Elastodynamics(V, M, K, bcs, scheme=scheme, damping=damping)
+    phi.copy(problem.u.x.petsc_vec)
+    problem.u.x.scatter_forward()
+    problem.initialise(0.0)
+    return problem
+
+
+def modal_coordinate(M: PETSc.Mat, phi: PETSc.Vec):
+    y = M.createVecLeft()
+    M.mult(phi, y)
+    return lambda problem: {"q": problem.u.x.petsc_vec.dot(y)}
+
+
+def test_energy_conserved_over_1000_steps(beam, modes):
+    """Average acceleration, no damping: E = 1/2 v.Mv + 1/2 u.Ku constant to 1e-8 (relative)."""
+    V, M, K, bcs = beam
+    omega, phi = modes[0]
+    u0 = phi.copy()
+    u0.axpy(0.7, modes[1][1])
+    u0.axpy(0.3, modes[2][1])  # three modes, so the energy moves between them
+    problem = start_in_mode(V, M, K, bcs, u0, GeneralisedAlpha())
+    e0 = sum(problem.energy())
+    dt = 2 * np.pi / omega / 37.0
+    energies = []
+    for _ in range(1000):
+        assert problem.step(dt).converged
+        energies.append(sum(problem.energy()))
+    drift = np.max(np.abs(np.array(energies) - e0)) / e0
+    print(f"max relative energy drift over 1000 steps: {drift:.2e}")
+    assert drift < 1e-8
+    kinetic, strain = problem.energy()
+    assert kinetic > 0.01 * e0  # the motion did not stop
+
+
+@pytest.mark.parametrize("scheme", [GeneralisedAlpha(), GeneralisedAlpha.from_spectral_radius(0.8)],
+                         ids=["newmark", "generalised-alpha"])
+def test_second_order_convergence(beam, modes, scheme):
+    """Error of the modal-coordinate history vs cos(omega t) over two periods: rate 2."""
+    V, M, K, bcs = beam
+    omega, phi = modes[0]
+    period = 2 * np.pi / omega
+    errors = []
+    for n in (16, 32, 64):
+        problem = start_in_mode(V, M, K, bcs, phi, scheme)
+        rows = run(problem, 2 * period, period / n, observers=[modal_coordinate(M, phi)], progress=False)
+        t = np.array([r["time_s"] for r in rows])
+        q = np.array([r["q"] for r in rows])
+        errors.append(np.max(np.abs(q - np.cos(omega * t))))
+    rates = np.log2(np.array(errors[:-1]) / np.array(errors[1:]))
+    print(f"{scheme}: errors {errors}, rates {rates}")
+    assert np.all(np.abs(rates - 2.0) < 0.15)
+
+
+def measured_damping_ratio(t: np.ndarray, q: np.ndarray) -> float:
+    """Damping ratio from the logarithmic decrement between the first and last peak of q(t)."""
+    i = np.flatnonzero((q[1:-1] > q[:-2]) & (q[1:-1] >= q[2:])) + 1
+    # parabolic refinement of each sampled peak
+    y0, y1, y2 = q[i - 1], q[i], q[i + 1]
+    peaks = y1 - 0.25 * (y0 - y2) ** 2 / (y0 - 2 * y1 + y2)
+    delta = np.log(peaks[0] / peaks[-1]) / (len(peaks) - 1)
+    return delta / np.sqrt(4 * np.pi**2 + delta**2)
+
+
+@pytest.mark.parametrize("kind", ["rayleigh-at-frequency", "rayleigh-two-frequencies", "modal"])
+def test_free_decay_gives_prescribed_damping_ratio(beam, modes, kind):
+    V, M, K, bcs = beam
+    omega, phi = modes[0]
+    f1, f3 = omega / (2 * np.pi), modes[2][0] / (2 * np.pi)
+    zeta = 0.01
+    damping = {
+        "rayleigh-at-frequency": lambda: RayleighDamping.at_frequency(zeta, f1),
+        "rayleigh-two-frequencies": lambda: RayleighDamping.from_two_frequencies(zeta, f1, 0.03, f3),
+        "modal": lambda: ModalDamping(M, [m[1] for m in modes], [m[0] / (2 * np.pi) for m in modes], zeta),
+    }[kind]()
+    period = 2 * np.pi / omega
+    problem = start_in_mode(V, M, K, bcs, phi, GeneralisedAlpha(), damping)
+    rows = run(problem, 6.05 * period, period / 100, observers=[modal_coordinate(M, phi)], progress=False)
+    measured = measured_damping_ratio(np.array([r["time_s"] for r in rows]), np.array([r["q"] for r in rows]))
+    print(f"{kind}: measured zeta = {measured:.5f} (prescribed {zeta})")
+    assert measured == pytest.approx(zeta, rel=0.02)
+
+
+def test_rayleigh_coefficients_hit_both_frequencies():
+    d = RayleighDamping.from_two_frequencies(0.01, 50.0, 0.02, 200.0)
+    assert d.ratio(50.0) == pytest.approx(0.01, rel=1e-12)
+    assert d.ratio(200.0) == pytest.approx(0.02, rel=1e-12)
+    d1 = RayleighDamping.at_frequency(0.01, 120.0)
+    assert d1.ratio(120.0) == pytest.approx(0.01, rel=1e-12)
+    assert d1.ratio(60.0) > 0.01 and d1.ratio(240.0) > 0.01
+
+
+def test_quasi_static_follows_the_load(beam):
+    """Quasi-static stepping under a load ramp f(t) = t F reproduces K u = f(t) at every step."""
+    V, M, K, bcs = beam
+    F = K.createVecLeft()
+    rng = np.random.default_rng(0)
+    F.array_w[:] = rng.standard_normal(F.getLocalSize())
+    set_bc(F, bcs, alpha=0.0)  # zero on the clamped rows
+    problem = Elastodynamics(V, M, K, bcs, scheme=QuasiStatic(), load=lambda t, out: out.axpy(t, F))
+    problem.initialise(0.0)
+    run(problem, 1.0, 0.25, progress=False)
+    residual = F.copy()
+    residual.scale(-1.0)
+    K.multAdd(problem.u.x.petsc_vec, residual, residual)  # K u(1) - F
+    assert residual.norm() < 1e-10 * F.norm()
+
+
+@pytest.mark.parametrize("kwargs", [dict(beta=0.0), dict(gamma=1.5), dict(alpha_f=1.0)])
+def test_bad_scheme_parameters_raise(kwargs):
+    with pytest.raises(ValueError):
+        GeneralisedAlpha(**kwargs)
+
+
+def test_bad_damping_raises():
+    with pytest.raises(ValueError):
+        RayleighDamping.from_two_frequencies(0.01, 10.0, 0.01, 10.0)
+    with pytest.raises(ValueError):
+        RayleighDamping(a=-1.0)
