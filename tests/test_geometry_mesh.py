@@ -1,0 +1,184 @@
+"""Hexahedral meshes of MP and TP in DOLFINx: volumes, areas, tags, placement.
+
+Runs serially and under ``mpiexec -n 2`` (all quantities are reduced over ranks).
+"""
+
+import math
+from dataclasses import replace
+from pathlib import Path
+
+import numpy as np
+import pytest
+import ufl
+from mpi4py import MPI
+
+import dolfinx
+from geometry import tags
+from geometry.mesh import create_joint_mesh, create_tube_mesh, write_paraview
+from geometry.parameters import ConePart, JointGeometry, MeshOptions, load_geometry
+
+pytestmark = pytest.mark.mpi
+
+CASES = Path(__file__).resolve().parents[1] / "cases"
+COMM = MPI.COMM_WORLD
+
+
+@pytest.fixture(scope="module")
+def scaled() -> JointGeometry:
+    return load_geometry(CASES / "scaled.toml")[0]
+
+
+def integrate(mesh_data, measure: str, tag: int) -> float:
+    mesh = mesh_data.mesh
+    data = mesh_data.cell_tags if measure == "dx" else mesh_data.facet_tags
+    m = ufl.Measure(measure, domain=mesh, subdomain_data=data)
+    one = dolfinx.fem.Constant(mesh, 1.0)
+    return COMM.allreduce(dolfinx.fem.assemble_scalar(dolfinx.fem.form(one * m(tag))))
+
+
+def owned_count(mesh_data, dim: int, tag: int) -> int:
+    """Number of entities with ``tag`` owned by this rank, summed over ranks."""
+    meshtags = mesh_data.cell_tags if dim == 3 else mesh_data.facet_tags
+    n_owned = mesh_data.mesh.topology.index_map(dim).size_local
+    return COMM.allreduce(int(np.sum(meshtags.find(tag) < n_owned)))
+
+
+def structured_counts(joint: JointGeometry, o: MeshOptions) -> dict[int, int]:
+    """Expected global entity counts of the structured meshes."""
+
+    def n_along(part: ConePart) -> int:
+        h = part.profile_heights()
+        return sum(o.n_axial(b - a) for a, b in zip(h[:-1], h[1:]))
+
+    ring = o.n_circumferential * o.n_layers
+    return {
+        tags.MP_VOLUME: ring * n_along(joint.mp),
+        tags.TP_VOLUME: ring * n_along(joint.tp),
+        tags.MP_CLAMPED: ring,
+        tags.TP_TOP: ring,
+        tags.MP_CONTACT: o.n_circumferential * o.n_axial(joint.mp.cone_length),
+        tags.TP_CONTACT: o.n_circumferential * o.n_axial(joint.tp.cone_length),
+    }
+
+
+@pytest.mark.parametrize("n_layers", [1, 2])
+@pytest.mark.parametrize("axial_size", [0.08, 0.04])
+@pytest.mark.parametrize("n_circ", [24, 48])
+def test_volumes_areas_and_tags(scaled, n_circ, axial_size, n_layers):
+    """Volumes and contact areas within 0.5 % of exact; every tag complete over ranks."""
+    options = MeshOptions(n_circumferential=n_circ, axial_size=axial_size, n_layers=n_layers)
+    md = create_joint_mesh(COMM, scaled, options)
+    assert md.mesh.topology.cell_type == dolfinx.mesh.CellType.hexahedron
+    assert md.mesh.geometry.cmaps[0].degree == 2
+    for tag, part in ((tags.MP_VOLUME, scaled.mp), (tags.TP_VOLUME, scaled.tp)):
+        assert integrate(md, "dx", tag) == pytest.approx(part.volume, rel=5e-3)
+    assert integrate(md, "ds", tags.MP_CONTACT) == pytest.approx(scaled.mp.outer_cone_area, rel=5e-3)
+    assert integrate(md, "ds", tags.TP_CONTACT) == pytest.approx(scaled.tp.inner_cone_area, rel=5e-3)
+    expected = structured_counts(scaled, options)
+    for tag, count in expected.items():
+        assert owned_count(md, 3 if tag in (tags.MP_VOLUME, tags.TP_VOLUME) else 2, tag) == count > 0
+    # conforming closed walls: exterior facets are only the two annuli and two lateral walls per part
+    md.mesh.topology.create_connectivity(2, 3)
+    exterior = dolfinx.mesh.exterior_facet_indices(md.mesh.topology)
+    n_ext = COMM.allreduce(int(np.sum(exterior < md.mesh.topology.index_map(2).size_local)))
+    lateral = 2 * (expected[tags.MP_VOLUME] + expected[tags.TP_VOLUME]) // n_layers
+    assert n_ext == lateral + 4 * n_circ * n_layers
+
+
+def test_curved_geometry_is_not_faceted(scaled):
+    """Order 1 (straight edges) gives exactly the polygon's area, 24 around: -0.29 %;
+    order 2 places the mid-edge nodes on the circles, error below 1e-5."""
+    ratios = []
+    for order in (1, 2):
+        md = create_joint_mesh(COMM, scaled, MeshOptions(n_circumferential=24, geometry_order=order))
+        ratios.append(integrate(md, "ds", tags.MP_CONTACT) / scaled.mp.outer_cone_area)
+    mp, n = scaled.mp, 24
+    r1, r2 = mp.cone_bottom_outer_radius, mp.cone_top_outer_radius
+    # n planar trapezoids: chords 2 r sin(pi/n), height between chord midpoints
+    height = math.hypot(mp.cone_length, (r1 - r2) * math.cos(math.pi / n))
+    polygon = n * math.sin(math.pi / n) * (r1 + r2) * height / mp.outer_cone_area
+    assert ratios[0] == pytest.approx(polygon, rel=1e-9)
+    assert abs(ratios[1] - 1) < 1e-5 < abs(polygon - 1)
+
+
+def surface_nodes(md, tag: int) -> np.ndarray:
+    """Coordinates of the geometry nodes of the facets tagged ``tag``, gathered on all ranks."""
+    mesh = md.mesh
+    facets = md.facet_tags.find(tag)
+    nodes = dolfinx.mesh.entities_to_geometry(mesh, 2, facets)
+    x = mesh.geometry.x[np.unique(nodes)]
+    return np.unique(np.round(np.concatenate(COMM.allgather(x)), 12), axis=0)
+
+
+def test_first_contact_height_measured_on_mesh(scaled):
+    """Rigidly lowering the meshed TP until its contact nodes touch the meshed MP surface
+    gives the closed-form first-contact height within 0.1 mm; at placement the gap is ~0
+    at the lower edge and positive above it."""
+    options = MeshOptions(n_circumferential=24, axial_size=0.04)
+    md = create_joint_mesh(COMM, scaled, options)
+    mp, tp = surface_nodes(md, tags.MP_CONTACT), surface_nodes(md, tags.TP_CONTACT)
+    n_angles = 2 * options.n_circumferential  # vertices and mid-edge nodes (order 2)
+
+    def angle_index(x):
+        return np.round(np.arctan2(x[:, 1], x[:, 0]) * n_angles / (2 * np.pi)).astype(int) % n_angles
+
+    mp_key, tp_key = angle_index(mp), angle_index(tp)
+    assert set(tp_key) == set(mp_key) == set(range(n_angles))
+
+    def gaps(shift: float) -> np.ndarray:
+        """Radial gap of every TP contact node to the MP surface along the same generator
+        (+inf where the node, lowered by ``shift``, is above or below the MP cone)."""
+        g = np.full(len(tp), np.inf)
+        z = tp[:, 2] - shift
+        for k in range(n_angles):
+            m = mp[mp_key == k]
+            t = (tp_key == k) & (z >= m[:, 2].min()) & (z <= m[:, 2].max())
+            order = np.argsort(m[:, 2])
+            r_mp = np.interp(z[t], m[order, 2], np.hypot(m[order, 0], m[order, 1]))
+            g[t] = np.hypot(tp[t, 0], tp[t, 1]) - r_mp
+        return g
+
+    z_edge = tp[:, 2].min()
+    g0 = gaps(0.0)
+    assert abs(g0.min()) < 1e-9
+    assert np.all(g0[tp[:, 2] > z_edge + 1e-6] > 0)
+    lo, hi = -0.05, 0.05  # shift down (positive) closes the gap
+    for _ in range(60):
+        mid = 0.5 * (lo + hi)
+        lo, hi = (mid, hi) if gaps(mid).min() > 0 else (lo, mid)
+    measured = z_edge - 0.5 * (lo + hi)
+    assert measured == pytest.approx(scaled.first_contact_height, abs=1e-4)
+    assert z_edge == pytest.approx(scaled.first_contact_height, abs=1e-12)
+
+
+def test_tube_mesh():
+    """Clamped-free cylinder for the modal analysis: mid-surface radius 0.297 m, h = 6 mm."""
+    part = ConePart(0.0, 0.600, 1.4, 0.0, 0.006)
+    options = MeshOptions(n_circumferential=24, axial_size=0.1, n_layers=2)
+    md = create_tube_mesh(COMM, part, options)
+    assert integrate(md, "dx", tags.VOLUME) == pytest.approx(part.volume, rel=1e-4)
+    annulus = math.pi * (0.3**2 - 0.294**2)
+    assert integrate(md, "ds", tags.BOTTOM) == pytest.approx(annulus, rel=1e-4)
+    assert integrate(md, "ds", tags.TOP) == pytest.approx(annulus, rel=1e-4)
+    assert integrate(md, "ds", tags.OUTER) == pytest.approx(2 * math.pi * 0.3 * 1.4, rel=1e-4)
+    assert integrate(md, "ds", tags.INNER) == pytest.approx(2 * math.pi * 0.294 * 1.4, rel=1e-4)
+    assert owned_count(md, 3, tags.VOLUME) == 24 * 14 * 2
+
+
+def test_paraview_export(scaled, tmp_path_factory):
+    out = Path(COMM.bcast(str(tmp_path_factory.mktemp("xdmf")) if COMM.rank == 0 else None))
+    md = create_joint_mesh(COMM, scaled, MeshOptions(n_circumferential=24))
+    path = write_paraview(md, out / "joint")
+    COMM.barrier()
+    assert path.exists() and path.with_suffix(".h5").exists()
+    with dolfinx.io.XDMFFile(COMM, path, "r") as xdmf:
+        mesh = xdmf.read_mesh(name="slipjoint")
+        cell_tags = xdmf.read_meshtags(mesh, name="cell_tags")
+    n_owned = mesh.topology.index_map(3).size_local
+    counts = [COMM.allreduce(int(np.sum(cell_tags.find(t) < n_owned))) for t in (1, 2)]
+    assert counts == [owned_count(md, 3, 1), owned_count(md, 3, 2)]
+
+
+def test_bad_imperfection_key(scaled):
+    with pytest.raises(ValueError, match="imperfections keys"):
+        create_joint_mesh(COMM, scaled, MeshOptions(), imperfections={"TP": lambda t, z: 0 * t})
