@@ -84,6 +84,10 @@ start=$(date +%s)
 (cd /tmp/slipjoint-build && ctest --output-on-failure "$@")
 status=$?
 echo "== suite wall time: $(( $(date +%s) - start )) s (exit status $status)"
+echo "== pytest counts per CTest test (first rank's line for _mpi2; skips show only here)"
+sed 's/\x1b\[[0-9;]*m//g' /tmp/slipjoint-build/Testing/Temporary/LastTest.log | awk '
+    / Testing: / { name = $3; shown = 0 }
+    /^=* ?[0-9]+ (passed|failed|skipped|error|deselected).* in [0-9.]+s/ && !shown { printf "  %-34s %s\n", name, $0; shown = 1 }'
 if [ "${RUN_DEMO:-false}" = true ]; then
     start=$(date +%s)
     (cd /src && mpirun -n 2 python3 demos/install.py --output /tmp/slipjoint-output)
