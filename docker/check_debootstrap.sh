@@ -78,7 +78,7 @@ cat >"$root/tmp/slipjoint-docker/run_suite.sh" <<'EOF'
 #!/bin/sh
 # Runs inside the root: the Dockerfile's test stage, then optionally its CMD.
 set -u
-rm -rf /root/.cache/fenics /tmp/slipjoint-build /tmp/slipjoint-output
+rm -rf "${XDG_CACHE_HOME:-/root/.cache}/fenics" /tmp/slipjoint-build /tmp/slipjoint-output
 cmake -S /src -B /tmp/slipjoint-build -DPYTHON=/usr/bin/python3 -DMPIEXEC=/usr/bin/mpirun >/dev/null || exit 1
 start=$(date +%s)
 (cd /tmp/slipjoint-build && ctest --output-on-failure "$@")
