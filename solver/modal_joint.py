@@ -1,0 +1,104 @@
+"""Modal analysis of the installed joint: mesh, clamp, bonded band, eigenpairs.
+
+Settings come from the ``[modal]`` table of a case file (all optional)::
+
+    [modal]
+    degree = 2           # Lagrange degree of the displacement
+    n_modes = 20         # lowest modes wanted
+    band_height = 0.05   # bonded band at the TP lower edge [m]
+    gamma0 = 100.0       # Nitsche parameter of the tie [-]
+    zeta = 0.01          # modal damping ratio for the resonant indicators [-]
+"""
+
+import time
+from collections.abc import Callable
+from dataclasses import dataclass
+from typing import Any
+
+from solver import backend  # noqa: F401  (before dolfinx)
+
+from dolfinx import fem
+from mpi4py import MPI
+
+from geometry import tags
+from geometry.mesh import create_joint_mesh
+from geometry.parameters import JointGeometry, MeshOptions, material_from_dict
+from solver.case import construct
+from solver.elasticity import Material
+from solver.modal import EigenOptions, ModalResult, clamp, modal_analysis
+from solver.modal_interface import ContactInterface, bonded_band
+
+
+@dataclass(frozen=True)
+class ModalSettings:
+    """Discretisation and coupling of the joint's modal analysis (SI units)."""
+
+    degree: int = 2
+    n_modes: int = 20
+    band_height: float = 0.05  #: [m]
+    gamma0: float = 100.0  #: [-]
+    zeta: float = 0.01  #: [-]
+
+    def __post_init__(self) -> None:
+        if self.degree not in (1, 2, 3, 4):
+            raise ValueError(f"degree must be 1..4, got {self.degree}")
+        if not (isinstance(self.n_modes, int) and self.n_modes >= 1):
+            raise ValueError(f"n_modes must be an integer >= 1, got {self.n_modes!r}")
+        if not self.band_height > 0:
+            raise ValueError(f"band_height must be positive, got {self.band_height} m")
+        if not self.gamma0 > 0:
+            raise ValueError(f"gamma0 must be positive, got {self.gamma0}")
+        if not 0 < self.zeta < 1:
+            raise ValueError(f"zeta must lie in (0, 1), got {self.zeta}")
+
+    @classmethod
+    def from_dict(cls, data: dict[str, Any]) -> "ModalSettings":
+        return construct(cls, data, "modal")
+
+
+@dataclass
+class JointCase:
+    """Everything a joint modal analysis reads from a case (checked on construction)."""
+
+    joint: JointGeometry
+    material: Material
+    mesh: MeshOptions
+    modal: ModalSettings
+
+    @classmethod
+    def from_dict(cls, case: dict[str, Any]) -> "JointCase":
+        if "geometry" not in case:
+            raise ValueError(f"{case.get('_source', 'case')}: no [geometry] table")
+        return cls(JointGeometry.from_dict(case["geometry"]), material_from_dict(case.get("material", {})),
+                   MeshOptions.from_dict(case.get("mesh", {})), ModalSettings.from_dict(case.get("modal", {})))
+
+
+@dataclass
+class JointModes:
+    """Result of :func:`joint_modes` and the objects needed to post-process it."""
+
+    result: ModalResult
+    mesh_data: Any
+    interface: ContactInterface
+    timings_s: dict[str, float]
+
+
+def joint_modes(comm: MPI.Comm, case: JointCase, log: Callable[[str], None] = lambda s: None) -> JointModes:
+    """Lowest modes of the installed joint: MP bottom clamped, TP top free, TP tied to the
+    MP over ``band_height`` at its lower edge (collective)."""
+    t0 = time.perf_counter()
+    mesh_data = create_joint_mesh(comm, case.joint, case.mesh)
+    V = fem.functionspace(mesh_data.mesh, ("Lagrange", case.modal.degree, (3,)))
+    n_dofs = V.dofmap.index_map.size_global * V.dofmap.index_map_bs
+    t1 = time.perf_counter()
+    log(f"mesh: {case.mesh.n_circumferential} around, {case.mesh.axial_size} m axially, degree "
+        f"{case.modal.degree}: {n_dofs} dofs ({t1 - t0:.1f} s)")
+    bc = clamp(V, mesh_data.facet_tags, [tags.MP_CLAMPED])
+    interface = bonded_band(V, mesh_data.facet_tags, case.material, case.modal.band_height, case.modal.gamma0)
+    t2 = time.perf_counter()
+    log(f"bonded band {1e3 * case.modal.band_height:.0f} mm: {100 * interface.tied_fraction():.1f} % of the "
+        f"TP contact points tied ({t2 - t1:.1f} s)")
+    result = modal_analysis(V, case.material, [bc], [interface], EigenOptions(n_modes=case.modal.n_modes))
+    t3 = time.perf_counter()
+    log(f"eigenproblem: {len(result.frequencies_hz)} modes ({t3 - t2:.1f} s)")
+    return JointModes(result, mesh_data, interface, {"mesh": t1 - t0, "interface": t2 - t1, "eigen": t3 - t2})
