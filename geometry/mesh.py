@@ -19,13 +19,13 @@ from pathlib import Path
 
 import gmsh
 import numpy as np
-import numpy.typing as npt
 from mpi4py import MPI
 
 import dolfinx
 import dolfinx.io.gmsh
 
 from geometry import tags
+from geometry.imperfections import RadialDeviation, check_imperfections
 from geometry.parameters import ConePart, JointGeometry, MeshOptions
 
 __all__ = [
@@ -37,10 +37,6 @@ __all__ = [
     "create_tube_mesh",
     "write_paraview",
 ]
-
-#: radial deviation [m] of a part's wall as a function of (angle [rad], part-local z [m])
-RadialDeviation = Callable[[npt.NDArray[np.float64], npt.NDArray[np.float64]], npt.NDArray[np.float64]]
-
 
 @dataclass(frozen=True)
 class _PartEntities:
@@ -135,14 +131,6 @@ def _generate(options: MeshOptions) -> None:
         gmsh.model.mesh.setOrder(options.geometry_order)
 
 
-def _checked(imperfections: Mapping[str, RadialDeviation] | None) -> dict[str, RadialDeviation]:
-    imperfections = dict(imperfections or {})
-    unknown = set(imperfections) - {"mp", "tp"}
-    if unknown:
-        raise ValueError(f"imperfections keys must be 'mp' and/or 'tp', got {sorted(unknown)}")
-    return imperfections
-
-
 def build_joint_model(
     joint: JointGeometry,
     options: MeshOptions,
@@ -154,7 +142,7 @@ def build_joint_model(
     ``f(theta [rad], part-local z [m]) -> dr [m]`` applied to all nodes of that
     part (the whole wall moves, the thickness is kept).
     """
-    imperfections = _checked(imperfections)
+    imperfections = check_imperfections(imperfections)
     mp = _add_part(joint.mp, 0.0, options)
     tp = _add_part(joint.tp, joint.tp_offset, options)
     _close_revolutions()
@@ -223,7 +211,7 @@ def create_joint_mesh(
     imperfections: Mapping[str, RadialDeviation] | None = None,
 ) -> dolfinx.io.gmsh.MeshData:
     """DOLFINx mesh of MP and TP (TP at first contact) with cell and facet tags."""
-    _checked(imperfections)  # on every rank, before rank 0 enters gmsh
+    check_imperfections(imperfections)  # on every rank, before rank 0 enters gmsh
     return _to_dolfinx(comm, lambda: build_joint_model(joint, options, imperfections), "slipjoint")
 
 

@@ -14,6 +14,7 @@ from mpi4py import MPI
 
 import dolfinx
 from geometry import tags
+from geometry.imperfections import ovality
 from geometry.mesh import create_joint_mesh, create_tube_mesh, write_paraview
 from geometry.parameters import ConePart, JointGeometry, MeshOptions, load_geometry
 
@@ -110,14 +111,14 @@ def surface_nodes(md, tag: int) -> np.ndarray:
     return np.unique(np.round(np.concatenate(COMM.allgather(x)), 12), axis=0)
 
 
-def test_first_contact_height_measured_on_mesh(scaled):
-    """Rigidly lowering the meshed TP until its contact nodes touch the meshed MP surface
-    gives the closed-form first-contact height within 0.1 mm; at placement the gap is ~0
-    at the lower edge and positive above it."""
-    options = MeshOptions(n_circumferential=24, axial_size=0.04)
-    md = create_joint_mesh(COMM, scaled, options)
+def rigid_contact_on_mesh(md, n_circumferential: int) -> tuple[float, float, np.ndarray, np.ndarray]:
+    """Lower the meshed TP rigidly until a TP contact node touches the meshed MP surface.
+
+    The MP surface along each generator is interpolated linearly in z between its nodes
+    (exact for a cone). Returns (TP lower-edge z, measured first-contact z of that edge,
+    gaps at placement, TP node heights)."""
     mp, tp = surface_nodes(md, tags.MP_CONTACT), surface_nodes(md, tags.TP_CONTACT)
-    n_angles = 2 * options.n_circumferential  # vertices and mid-edge nodes (order 2)
+    n_angles = 2 * n_circumferential  # vertices and mid-edge nodes (order 2)
 
     def angle_index(x):
         return np.round(np.arctan2(x[:, 1], x[:, 0]) * n_angles / (2 * np.pi)).astype(int) % n_angles
@@ -138,17 +139,45 @@ def test_first_contact_height_measured_on_mesh(scaled):
             g[t] = np.hypot(tp[t, 0], tp[t, 1]) - r_mp
         return g
 
-    z_edge = tp[:, 2].min()
-    g0 = gaps(0.0)
-    assert abs(g0.min()) < 1e-9
-    assert np.all(g0[tp[:, 2] > z_edge + 1e-6] > 0)
     lo, hi = -0.05, 0.05  # shift down (positive) closes the gap
     for _ in range(60):
         mid = 0.5 * (lo + hi)
         lo, hi = (mid, hi) if gaps(mid).min() > 0 else (lo, mid)
-    measured = z_edge - 0.5 * (lo + hi)
+    z_edge = tp[:, 2].min()
+    return z_edge, z_edge - 0.5 * (lo + hi), gaps(0.0), tp[:, 2]
+
+
+def test_first_contact_height_measured_on_mesh(scaled):
+    """Rigidly lowering the meshed TP until its contact nodes touch the meshed MP surface
+    gives the closed-form first-contact height within 0.1 mm; at placement the gap is ~0
+    at the lower edge and positive above it."""
+    md = create_joint_mesh(COMM, scaled, MeshOptions(n_circumferential=24, axial_size=0.04))
+    z_edge, measured, g0, z = rigid_contact_on_mesh(md, 24)
+    assert abs(g0.min()) < 1e-9
+    assert np.all(g0[z > z_edge + 1e-6] > 0)
     assert measured == pytest.approx(scaled.first_contact_height, abs=1e-4)
     assert z_edge == pytest.approx(scaled.first_contact_height, abs=1e-12)
+
+
+def test_tp_ovality_on_mesh(scaled):
+    """An m = 2 TP ovality of amplitude A applied to the mesh nodes (whole wall, thickness
+    kept) raises the first contact by A / tan(alpha) (closed form) within 1 %."""
+    amplitude = 0.5e-3
+    md = create_joint_mesh(COMM, scaled, MeshOptions(n_circumferential=24, axial_size=0.04),
+                           imperfections={"tp": ovality(amplitude)})
+    # every TP node moved radially by A cos(2 theta); MP nodes untouched
+    for tag, part, z0, amp in ((tags.TP_VOLUME, scaled.tp, scaled.tp_offset, amplitude),
+                               (tags.MP_VOLUME, scaled.mp, 0.0, 0.0)):
+        nodes = np.unique(dolfinx.mesh.entities_to_geometry(md.mesh, 3, md.cell_tags.find(tag)))
+        x = md.mesh.geometry.x[nodes]
+        r, theta = np.hypot(x[:, 0], x[:, 1]), np.arctan2(x[:, 1], x[:, 0])
+        # depth in the wall after removing the deviation: inner, mid-wall or outer node (hex27)
+        depth = (r - amp * np.cos(2 * theta) - part.inner_radius(x[:, 2] - z0)) / part.thickness
+        off = np.min(np.abs(depth[:, None] - np.array([0.0, 0.5, 1.0])), axis=1)
+        assert COMM.allreduce(float(off.max(initial=0.0)), op=MPI.MAX) < 1e-6
+    _, measured, _, _ = rigid_contact_on_mesh(md, 24)
+    shift = amplitude / math.tan(scaled.mp.half_angle)
+    assert measured - scaled.first_contact_height == pytest.approx(shift, rel=0.01)
 
 
 def test_tube_mesh():
