@@ -48,6 +48,72 @@ def _gap(joint: JointGeometry, r_tp: np.ndarray, theta: np.ndarray, zeta: np.nda
     return np.where((z <= joint.mp.total_length) & (z >= 0.0), r_tp - r_mp, np.inf)
 
 
+@dataclass(frozen=True)
+class _Surfaces:
+    """The TP contact surface on a (zeta, theta) grid and the gap to the MP at an overlap."""
+
+    joint: JointGeometry
+    theta: np.ndarray  # (n_zeta + 1, n_theta)
+    zeta: np.ndarray
+    r_tp: np.ndarray
+    dr_mp: RadialDeviation | None
+
+    @classmethod
+    def on_grid(cls, joint: JointGeometry, imperfections: dict[str, RadialDeviation],
+                n_theta: int, n_zeta: int) -> _Surfaces:
+        tp = joint.tp
+        theta = np.arange(n_theta) * 2 * np.pi / n_theta
+        zeta = np.linspace(tp.cone_bottom_z, tp.cone_top_z, n_zeta + 1)
+        th, ze = np.meshgrid(theta, zeta)
+        r_tp = tp.inner_radius(ze)
+        if "tp" in imperfections:
+            r_tp = r_tp + imperfections["tp"](th, ze)
+        return cls(joint, th, ze, r_tp, imperfections.get("mp"))
+
+    def gap(self, overlap: float) -> np.ndarray:
+        return _gap(self.joint, self.r_tp, self.theta, self.zeta, overlap, self.dr_mp)
+
+    def first_contact(self, lo: float, hi: float) -> float:
+        """Overlap of first contact in [lo, hi] by bisection on the minimum gap [m]."""
+        for _ in range(60):
+            mid = 0.5 * (lo + hi)
+            lo, hi = (mid, hi) if self.gap(mid).min() > 0 else (lo, mid)
+        return 0.5 * (lo + hi)
+
+
+def first_contact_overlap(
+    joint: JointGeometry,
+    imperfections: Mapping[str, RadialDeviation] | None = None,
+    n_theta: int = 360,
+    n_zeta: int = 400,
+) -> float:
+    """Overlap [m] at which the (possibly imperfect) TP first touches the MP when lowered rigidly.
+
+    Without imperfections this is ``joint.overlap``; with them the contact is searched
+    within the largest sampled deviation, converted to height by the MP cone slope.
+    """
+    imperfections = check_imperfections(imperfections)
+    if not imperfections:
+        return joint.overlap
+    surfaces = _Surfaces.on_grid(joint, imperfections, n_theta, n_zeta)
+    largest = np.abs(surfaces.r_tp - joint.tp.inner_radius(surfaces.zeta)).max()
+    if surfaces.dr_mp is not None:
+        z_mp = np.linspace(0.0, joint.mp.total_length, n_zeta + 1)[:, None]
+        largest += np.abs(surfaces.dr_mp(surfaces.theta[:1], z_mp)).max()
+    reach = 2.0 * largest / np.tan(joint.mp.half_angle) + 1e-3 * joint.tp.cone_length
+    lo, hi = joint.overlap - reach, joint.overlap + reach
+    if surfaces.gap(lo).min() <= 0 or surfaces.gap(hi).min() > 0:
+        raise ValueError(f"no first contact found between overlaps {lo:.6g} m and {hi:.6g} m "
+                         "(imperfections too large for the joint?)")
+    return surfaces.first_contact(lo, hi)
+
+
+def tp_placement(joint: JointGeometry,
+                 imperfections: Mapping[str, RadialDeviation] | None = None) -> float:
+    """Global z [m] of the TP's lower end at first contact; ``joint.tp_offset`` if perfect."""
+    return joint.mp.total_length - first_contact_overlap(joint, imperfections)
+
+
 def rigid_contact_map(
     joint: JointGeometry,
     imperfections: Mapping[str, RadialDeviation] | None = None,
@@ -59,38 +125,32 @@ def rigid_contact_map(
 
     ``imperfections`` maps ``"mp"``/``"tp"`` to radial deviations
     ``f(theta [rad], part-local z [m]) -> dr [m]``. Default sweep: from 10 % of the
-    TP cone length above the perfect first contact to twice the required slip below it.
+    TP cone length above the first contact to twice the required slip below it.
     The first-contact overlap is refined by bisection between sweep samples.
     """
     imperfections = check_imperfections(imperfections)
-    tp = joint.tp
     if overlaps is None:
-        overlaps = np.linspace(joint.overlap - 0.1 * tp.cone_length,
-                               joint.overlap + 2.0 * joint.required_slip, 201)
+        start = first_contact_overlap(joint, imperfections, n_theta, n_zeta)
+        overlaps = np.linspace(start - 0.1 * joint.tp.cone_length,
+                               start + 2.0 * joint.required_slip, 201)
     overlaps = np.asarray(overlaps, dtype=np.float64)
     if overlaps.ndim != 1 or overlaps.size < 2 or np.any(np.diff(overlaps) <= 0):
         raise ValueError("overlaps must be an increasing 1D array of at least two values [m]")
 
-    theta = np.arange(n_theta) * 2 * np.pi / n_theta
-    zeta = np.linspace(tp.cone_bottom_z, tp.cone_top_z, n_zeta + 1)
-    th, ze = np.meshgrid(theta, zeta)
-    r_tp = tp.inner_radius(ze)
-    if "tp" in imperfections:
-        r_tp = r_tp + imperfections["tp"](th, ze)
-    weight = tp.inner_radius(zeta)  # area element ~ r dtheta dzeta (trapezoid rule in zeta)
+    surfaces = _Surfaces.on_grid(joint, imperfections, n_theta, n_zeta)
+    th, ze = surfaces.theta, surfaces.zeta
+    zeta = ze[:, 0]
+    weight = joint.tp.inner_radius(zeta)  # area element ~ r dtheta dzeta (trapezoid rule in zeta)
     weight[[0, -1]] *= 0.5
     weight = np.broadcast_to(weight[:, None], th.shape) / (n_theta * weight.sum())
 
-    def gap(o: float) -> np.ndarray:
-        return _gap(joint, r_tp, th, ze, o, imperfections.get("mp"))
-
-    previous = gap(overlaps[0])
+    previous = surfaces.gap(overlaps[0])
     if np.any(previous <= 0.0):
         raise ValueError(f"already in contact at overlap {overlaps[0]:.6g} m: start the overlaps lower")
     fraction = np.zeros(overlaps.size)
     onset = np.full(th.shape, np.nan)
     for k in range(1, overlaps.size):
-        o, g = overlaps[k], gap(overlaps[k])
+        o, g = overlaps[k], surfaces.gap(overlaps[k])
         touching = g <= 0.0
         fraction[k] = weight[touching].sum()
         new = touching & np.isnan(onset)
@@ -100,8 +160,8 @@ def rigid_contact_map(
         g_start = previous[new]
         entered = ~np.isfinite(g_start)
         o_start[entered] = ze[new][entered]
-        g_start[entered] = _gap(joint, r_tp[new][entered], th[new][entered], ze[new][entered],
-                                o_start[entered], imperfections.get("mp"))
+        g_start[entered] = _gap(joint, surfaces.r_tp[new][entered], th[new][entered],
+                                ze[new][entered], o_start[entered], surfaces.dr_mp)
         t = np.divide(g_start, g_start - g[new], out=np.zeros_like(g_start), where=g_start > 0)
         onset[new] = o_start + t * (o - o_start)
         previous = g
@@ -109,11 +169,8 @@ def rigid_contact_map(
     hits = np.flatnonzero(fraction > 0)
     if hits.size == 0:
         raise ValueError(f"no contact up to overlap {overlaps[-1]:.6g} m: extend the overlaps")
-    lo, hi = overlaps[hits[0] - 1], overlaps[hits[0]]
-    for _ in range(60):
-        mid = 0.5 * (lo + hi)
-        lo, hi = (mid, hi) if gap(mid).min() > 0 else (lo, mid)
-    return ContactMap(overlaps, fraction, 0.5 * (lo + hi), theta, zeta, onset)
+    first = surfaces.first_contact(overlaps[hits[0] - 1], overlaps[hits[0]])
+    return ContactMap(overlaps, fraction, first, th[0], zeta, onset)
 
 
 def plot_contact_map(result: ContactMap, path: str | Path) -> Path:

@@ -122,18 +122,28 @@ class _Station:
     rows: list[tuple[int, dict[str, float | str]]]
 
 
-def _read_rows(path: Path, columns: tuple[str, ...],
-               text_columns: tuple[str, ...] = ()) -> list[tuple[int, dict[str, float | str]]]:
-    """Rows of a CSV file as (line number, {column: value}); numeric columns checked."""
+def _data_lines(path: Path) -> list[tuple[int, str]]:
+    """(line number, text) of the non-blank, non-comment lines; the first is the header."""
     if not path.is_file():
         raise ValueError(f"{path}: no such file")
     with path.open(newline="") as f:
         lines = [(i, line) for i, line in enumerate(f, start=1)
                  if line.strip() and not line.lstrip().startswith("#")]
     if not lines:
-        raise ValueError(f"{path}: empty file (expected a header with columns {list(columns)})")
+        raise ValueError(f"{path}: empty file (expected a header line)")
+    return lines
+
+
+def _split(line: str) -> list[str]:
+    return [c.strip() for c in next(csv.reader([line]))]
+
+
+def _read_rows(path: Path, columns: tuple[str, ...],
+               text_columns: tuple[str, ...] = ()) -> list[tuple[int, dict[str, float | str]]]:
+    """Rows of a CSV file as (line number, {column: value}); numeric columns checked."""
+    lines = _data_lines(path)
     header_line, header = lines[0]
-    names = [c.strip() for c in next(csv.reader([header]))]
+    names = _split(header)
     missing = [c for c in columns if c not in names]
     if missing:
         raise ValueError(f"{path}, line {header_line}: missing column(s) {missing}; "
@@ -141,7 +151,7 @@ def _read_rows(path: Path, columns: tuple[str, ...],
     index = {c: names.index(c) for c in columns}
     rows = []
     for lineno, line in lines[1:]:
-        fields = [c.strip() for c in next(csv.reader([line]))]
+        fields = _split(line)
         if len(fields) < len(names):
             raise ValueError(f"{path}, line {lineno}: {len(fields)} fields, expected {len(names)}")
         row: dict[str, float | str] = {}
@@ -306,3 +316,13 @@ def process_ring_scans(path: str | Path, part: ConePart, max_thickness_fraction:
         _check_size(path, f"lines {s.lines[0]}-{s.lines[1]} (station z_m = {s.z} m)", d, part,
                     max_thickness_fraction)
     return DeviationMap(z, deviation)  # (4) interpolation: DeviationMap.__call__
+
+
+def read_imperfection(path: str | Path, part: ConePart, **limits: float) -> DeviationMap:
+    """A deviation map from either file format, told apart by the header (``loop`` column:
+    raw scans); ``limits`` are passed on (``max_thickness_fraction``, ``max_angle_gap_deg``)."""
+    path = Path(path)
+    if "loop" in _split(_data_lines(path)[0][1]):
+        return process_ring_scans(path, part, **limits)
+    return read_deviation_map(path, part, **limits)
+

@@ -25,6 +25,7 @@ import dolfinx
 import dolfinx.io.gmsh
 
 from geometry import tags
+from geometry.contact_map import tp_placement
 from geometry.imperfections import RadialDeviation, check_imperfections
 from geometry.parameters import ConePart, JointGeometry, MeshOptions
 
@@ -135,16 +136,21 @@ def build_joint_model(
     joint: JointGeometry,
     options: MeshOptions,
     imperfections: Mapping[str, RadialDeviation] | None = None,
+    tp_z: float | None = None,
 ) -> None:
     """Populate the current gmsh model with the meshed MP and TP (TP at first contact).
 
     ``imperfections`` maps ``"mp"`` and/or ``"tp"`` to a radial deviation
     ``f(theta [rad], part-local z [m]) -> dr [m]`` applied to all nodes of that
-    part (the whole wall moves, the thickness is kept).
+    part (the whole wall moves, the thickness is kept). The TP's lower end is put
+    at ``tp_z`` [m], by default at the first contact of the (imperfect) surfaces,
+    :func:`geometry.contact_map.tp_placement` (``joint.tp_offset`` if perfect).
     """
     imperfections = check_imperfections(imperfections)
+    if tp_z is None:
+        tp_z = tp_placement(joint, imperfections)
     mp = _add_part(joint.mp, 0.0, options)
-    tp = _add_part(joint.tp, joint.tp_offset, options)
+    tp = _add_part(joint.tp, tp_z, options)
     _close_revolutions()
     groups = {
         tags.MP_VOLUME: (3, mp.volumes),
@@ -157,7 +163,7 @@ def build_joint_model(
     for tag, (dim, entities) in groups.items():
         gmsh.model.addPhysicalGroup(dim, entities, tag, name=tags.JOINT_NAMES[tag])
     _generate(options)
-    for name, part, z0 in (("mp", mp, 0.0), ("tp", tp, joint.tp_offset)):
+    for name, part, z0 in (("mp", mp, 0.0), ("tp", tp, tp_z)):
         if name in imperfections:
             _apply_deviation(part.volumes, z0, imperfections[name])
 
@@ -210,9 +216,11 @@ def create_joint_mesh(
     options: MeshOptions,
     imperfections: Mapping[str, RadialDeviation] | None = None,
 ) -> dolfinx.io.gmsh.MeshData:
-    """DOLFINx mesh of MP and TP (TP at first contact) with cell and facet tags."""
-    check_imperfections(imperfections)  # on every rank, before rank 0 enters gmsh
-    return _to_dolfinx(comm, lambda: build_joint_model(joint, options, imperfections), "slipjoint")
+    """DOLFINx mesh of MP and TP with cell and facet tags; the TP's lower end is at
+    :func:`geometry.contact_map.tp_placement` (``joint.tp_offset`` for perfect parts)."""
+    tp_z = tp_placement(joint, imperfections)  # on every rank: errors before gmsh starts
+    return _to_dolfinx(comm, lambda: build_joint_model(joint, options, imperfections, tp_z),
+                       "slipjoint")
 
 
 def create_tube_mesh(comm: MPI.Comm, part: ConePart, options: MeshOptions) -> dolfinx.io.gmsh.MeshData:

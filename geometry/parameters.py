@@ -19,14 +19,14 @@ Conventions
 from __future__ import annotations
 
 import math
-import tomllib
-from dataclasses import dataclass, fields
+from dataclasses import dataclass
 from pathlib import Path
 from typing import Any, Literal
 
 import numpy as np
 import numpy.typing as npt
 
+from solver.case import construct, read_case
 from solver.elasticity import Material
 
 #: accepted mismatch of a given cone-top diameter, relative to the bottom diameter
@@ -81,7 +81,7 @@ class ConePart:
     @classmethod
     def from_dict(cls, data: dict[str, Any], name: str = "part") -> ConePart:
         """Build from a plain dict (e.g. a TOML table); errors name the table ``name``."""
-        return _construct(cls, data, name)
+        return construct(cls, data, name)
 
     # --- derived geometry -------------------------------------------------------------
     @property
@@ -284,7 +284,7 @@ class MeshOptions:
     @classmethod
     def from_dict(cls, data: dict[str, Any]) -> MeshOptions:
         """Build from a plain dict (the ``[mesh]`` TOML table)."""
-        return _construct(cls, data, "mesh")
+        return construct(cls, data, "mesh")
 
     def n_axial(self, length: float) -> int:
         """Number of elements along an axial segment of ``length`` m."""
@@ -293,40 +293,28 @@ class MeshOptions:
 
 def material_from_dict(data: dict[str, Any]) -> Material:
     """Build a :class:`Material` from the ``[material]`` table (E [Pa], nu, rho [kg/m^3])."""
-    return _construct(Material, data, "material")
+    return construct(Material, data, "material")
 
 
-def load_geometry(path: str | Path) -> tuple[JointGeometry, Material, MeshOptions]:
-    """Read ``[geometry.mp]``, ``[geometry.tp]``, ``[material]`` and ``[mesh]`` of a TOML case.
+def geometry_from_case(case: dict[str, Any]) -> tuple[JointGeometry, Material, MeshOptions]:
+    """Joint, material and mesh options from a case dict (:func:`solver.case.read_case`).
 
-    Other tables are ignored. A missing ``[material]`` or ``[mesh]`` table gives the defaults.
+    Uses ``[geometry.mp]``, ``[geometry.tp]``, ``[material]`` and ``[mesh]``; other
+    tables are ignored; a missing ``[material]`` or ``[mesh]`` gives the defaults.
     """
-    path = Path(path)
+    source = case.get("_source", "case")
     try:
-        with path.open("rb") as f:
-            case = tomllib.load(f)
-    except tomllib.TOMLDecodeError as e:
-        raise ValueError(f"{path}: invalid TOML: {e}") from None
-    if "geometry" not in case:
-        raise ValueError(f"{path}: no [geometry] table")
-    try:
-        joint = JointGeometry.from_dict(case["geometry"])
-        material = material_from_dict(case.get("material", {}))
-        options = MeshOptions.from_dict(case.get("mesh", {}))
+        if "geometry" not in case:
+            raise ValueError("no [geometry] table")
+        return (JointGeometry.from_dict(case["geometry"]),
+                material_from_dict(case.get("material", {})),
+                MeshOptions.from_dict(case.get("mesh", {})))
     except ValueError as e:
-        raise ValueError(f"{path}: {e}") from None
-    return joint, material, options
+        raise ValueError(f"{source}: {e}") from None
 
 
-def _construct(cls: type, data: dict[str, Any], name: str) -> Any:
-    """``cls(**data)`` with errors that name the table and the offending keys."""
-    known = {f.name for f in fields(cls)}
-    unknown = set(data) - known
-    if unknown:
-        raise ValueError(f"[{name}] has unknown key(s) {sorted(unknown)}; expected some of {sorted(known)}")
-    try:
-        return cls(**data)
-    except TypeError as e:  # missing required keys
-        raise ValueError(f"[{name}] {e}") from None
-    except ValueError as e:
-        raise ValueError(f"[{name}] {e}") from None
+def load_geometry(path: str | Path, overrides: list[str] | None = None
+                  ) -> tuple[JointGeometry, Material, MeshOptions]:
+    """:func:`geometry_from_case` of a TOML case file (or preset name, e.g. ``"full_scale"``)
+    with optional ``section.key=value`` overrides."""
+    return geometry_from_case(read_case(path, overrides))

@@ -14,6 +14,7 @@ from mpi4py import MPI
 
 import dolfinx
 from geometry import tags
+from geometry.contact_map import tp_placement
 from geometry.imperfections import ovality
 from geometry.mesh import create_joint_mesh, create_tube_mesh, write_paraview
 from geometry.parameters import ConePart, JointGeometry, MeshOptions, load_geometry
@@ -163,10 +164,12 @@ def test_tp_ovality_on_mesh(scaled):
     """An m = 2 TP ovality of amplitude A applied to the mesh nodes (whole wall, thickness
     kept) raises the first contact by A / tan(alpha) (closed form) within 1 %."""
     amplitude = 0.5e-3
+    imperfections = {"tp": ovality(amplitude)}
     md = create_joint_mesh(COMM, scaled, MeshOptions(n_circumferential=24, axial_size=0.04),
-                           imperfections={"tp": ovality(amplitude)})
+                           imperfections)
     # every TP node moved radially by A cos(2 theta); MP nodes untouched
-    for tag, part, z0, amp in ((tags.TP_VOLUME, scaled.tp, scaled.tp_offset, amplitude),
+    tp_z = tp_placement(scaled, imperfections)
+    for tag, part, z0, amp in ((tags.TP_VOLUME, scaled.tp, tp_z, amplitude),
                                (tags.MP_VOLUME, scaled.mp, 0.0, 0.0)):
         nodes = np.unique(dolfinx.mesh.entities_to_geometry(md.mesh, 3, md.cell_tags.find(tag)))
         x = md.mesh.geometry.x[nodes]
@@ -175,9 +178,12 @@ def test_tp_ovality_on_mesh(scaled):
         depth = (r - amp * np.cos(2 * theta) - part.inner_radius(x[:, 2] - z0)) / part.thickness
         off = np.min(np.abs(depth[:, None] - np.array([0.0, 0.5, 1.0])), axis=1)
         assert COMM.allreduce(float(off.max(initial=0.0)), op=MPI.MAX) < 1e-6
-    _, measured, _, _ = rigid_contact_on_mesh(md, 24)
+    z_edge, measured, g0, _ = rigid_contact_on_mesh(md, 24)
     shift = amplitude / math.tan(scaled.mp.half_angle)
     assert measured - scaled.first_contact_height == pytest.approx(shift, rel=0.01)
+    # the TP is placed at its (imperfect) first contact: touching, not penetrating
+    assert z_edge == pytest.approx(measured, abs=1e-6)
+    assert abs(g0.min()) < 1e-7
 
 
 def test_tube_mesh():

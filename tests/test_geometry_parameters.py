@@ -109,3 +109,12 @@ def test_ignores_other_sections(tmp_path):
     assert material == Material(E=210e9, nu=0.3, rho=7850.0)
     assert options == MeshOptions()
     assert joint.mp.half_angle_deg == 1.05
+
+
+def test_preset_name_and_overrides():
+    joint, _, options = load_geometry("full_scale", ["mesh.n_circumferential=24",
+                                                     "geometry.tp.straight_length=1.0"])
+    assert options.n_circumferential == 24
+    assert joint.tp.straight_length == 1.0
+    with pytest.raises(ValueError, match=r"full_scale\.toml: \[mesh\] n_circumferential"):
+        load_geometry("full_scale", ["mesh.n_circumferential=10"])
