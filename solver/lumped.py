@@ -179,6 +179,24 @@ class Trajectory:
         """v [m], down positive."""
         return self.q[0]
 
+    def mechanical_energy(self, model: LumpedModel) -> npt.NDArray[np.float64]:
+        """Kinetic + elastic (springs and normal contact) energy [J] at every sample."""
+        m, k = model.masses, model.stiffness
+        g = np.maximum(model.a @ self.q, 0.0)
+        return 0.5 * (m @ self.qdot**2 + k @ self.q**2 + model.springs.K_N * g**2)
+
+    def slip_intervals(self) -> list[tuple[int, int]]:
+        """Sample index ranges [start, end] of the slip phases (ends at events)."""
+        slipping = np.isin(self.mode, (Mode.SLIP_DOWN.value, Mode.SLIP_UP.value))
+        out, start = [], None
+        for i in range(1, self.t.size):
+            if slipping[i] and start is None:
+                start = i - 1
+            if start is not None and (not slipping[i] or i == self.t.size - 1):
+                out.append((start, i if slipping[i] else i - 1))
+                start = None
+        return out
+
 
 class _Dynamics:
     """Right-hand side and event functions of one mode."""
