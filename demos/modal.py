@@ -28,10 +28,19 @@ QUICK = ["mesh.n_circumferential=24", "mesh.axial_size=0.2", "modal.n_modes=10"]
 def main(argv: list[str] | None = None) -> int:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--case", default="scaled", help="case file or preset name (cases/*.toml)")
-    parser.add_argument("--band", type=float, help="bonded band height at the TP lower edge [m] (default 0.05)")
-    parser.add_argument("--set", action="append", default=[], metavar="KEY=VALUE",
-                        help="override a case entry, e.g. modal.n_modes=30")
-    parser.add_argument("--quick", action="store_true", help="coarse smoke run (24 around, 0.2 m, 10 modes)")
+    parser.add_argument(
+        "--band", type=float, help="bonded band height at the TP lower edge [m] (default 0.05)"
+    )
+    parser.add_argument(
+        "--set",
+        action="append",
+        default=[],
+        metavar="KEY=VALUE",
+        help="override a case entry, e.g. modal.n_modes=30",
+    )
+    parser.add_argument(
+        "--quick", action="store_true", help="coarse smoke run (24 around, 0.2 m, 10 modes)"
+    )
     parser.add_argument("--output", default="output/modal", help="output folder")
     args = parser.parse_args(argv)
     comm = MPI.COMM_WORLD

@@ -37,7 +37,9 @@ def _bases(L: float, ends: tuple[EndCondition, EndCondition], n_terms: int) -> t
     if ends[1] == "clamped":
         f_uv, f_w = f_uv * (L - x), f_w * (L - x) ** 2
     # Legendre polynomials on [0, L]
-    legs = [legendre.Legendre.basis(k, domain=[0.0, L]).convert(kind=Polynomial) for k in range(n_terms)]
+    legs = [
+        legendre.Legendre.basis(k, domain=[0.0, L]).convert(kind=Polynomial) for k in range(n_terms)
+    ]
     return [f_uv * p for p in legs], [f_w * p for p in legs]
 
 
@@ -99,9 +101,25 @@ def cylinder_frequencies(
         return (a * wq) @ b.T
 
     # theta integral of cos^2 and sin^2 is pi; factor R for the area element
-    K = np.pi * R * (
-        C * (gram(e_x, e_x) + gram(e_t, e_t) + nu * (gram(e_x, e_t) + gram(e_t, e_x)) + 0.5 * (1 - nu) * gram(g_xt, g_xt))
-        + D * (gram(k_x, k_x) + gram(k_t, k_t) + nu * (gram(k_x, k_t) + gram(k_t, k_x)) + 2 * (1 - nu) * gram(tau, tau))
+    K = (
+        np.pi
+        * R
+        * (
+            C
+            * (
+                gram(e_x, e_x)
+                + gram(e_t, e_t)
+                + nu * (gram(e_x, e_t) + gram(e_t, e_x))
+                + 0.5 * (1 - nu) * gram(g_xt, g_xt)
+            )
+            + D
+            * (
+                gram(k_x, k_x)
+                + gram(k_t, k_t)
+                + nu * (gram(k_x, k_t) + gram(k_t, k_x))
+                + 2 * (1 - nu) * gram(tau, tau)
+            )
+        )
     )
     disp = [block(u=U), block(v=V), block(w=W)]
     M = np.pi * R * rho * h * sum(gram(d, d) for d in disp)

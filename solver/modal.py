@@ -87,7 +87,9 @@ class ModalResult:
         return self.modes[0].function_space
 
 
-def elastic_forms(V: fem.FunctionSpace, material: Material, dx: ufl.Measure | None = None) -> tuple[ufl.Form, ufl.Form]:
+def elastic_forms(
+    V: fem.FunctionSpace, material: Material, dx: ufl.Measure | None = None
+) -> tuple[ufl.Form, ufl.Form]:
     """Stiffness and mass bilinear forms int sigma(u):eps(v) dx and int rho u.v dx."""
     dx = ufl.dx(domain=V.mesh) if dx is None else dx
     u, v = ufl.TrialFunction(V), ufl.TestFunction(V)
@@ -139,7 +141,10 @@ def assemble_operators(
     for interface in interfaces:
         K_i = interface.stiffness(V)
         if K_i.getSizes() != K.getSizes():
-            raise ValueError(f"interface stiffness has sizes {K_i.getSizes()}, expected those of K {K.getSizes()}")
+            raise ValueError(
+                f"interface stiffness has sizes {K_i.getSizes()}, "
+                f"expected those of K {K.getSizes()}"
+            )
         K_i.zeroRowsColumns(clamped, diag=0.0)
         K.axpy(1.0, K_i, structure=PETSc.Mat.Structure.DIFFERENT_NONZERO_PATTERN)
         K_i.destroy()
@@ -152,7 +157,9 @@ def _omega2(f_hz: float) -> float:
     return (2.0 * np.pi * f_hz) ** 2
 
 
-def solve_eigenproblem(K: PETSc.Mat, M: PETSc.Mat, options: EigenOptions) -> tuple[np.ndarray, list[PETSc.Vec]]:
+def solve_eigenproblem(
+    K: PETSc.Mat, M: PETSc.Mat, options: EigenOptions
+) -> tuple[np.ndarray, list[PETSc.Vec]]:
     """Eigenpairs of K x = omega^2 M x: sorted frequencies [Hz] and M-normalised vectors."""
     comm = K.getComm()
     prefix = f"modal{next(_solver_ids)}_"

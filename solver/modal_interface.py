@@ -28,9 +28,14 @@ class ContactInterface:
 
     def __init__(self, contact: NitscheContact, status: npt.NDArray | Status):
         if contact.theta != 1:
-            raise ValueError(f"modal analysis needs the symmetric Nitsche variant (theta = 1), got {contact.theta}")
+            raise ValueError(
+                "modal analysis needs the symmetric Nitsche variant (theta = 1), "
+                f"got {contact.theta}"
+            )
         self.contact = contact
-        self.status = np.broadcast_to(np.asarray(status, dtype=np.int8), (contact.slave.num_points,)).copy()
+        self.status = np.broadcast_to(
+            np.asarray(status, dtype=np.int8), (contact.slave.num_points,)
+        ).copy()
 
     def stiffness(self, V: fem.FunctionSpace) -> PETSc.Mat:
         if V is not self.contact.V:
@@ -44,11 +49,21 @@ class ContactInterface:
         return tied / comm.allreduce(len(self.status))
 
 
-def bonded_band(V: fem.FunctionSpace, facet_tags, material: Material, height: float,
-                gamma0: float = 100.0) -> ContactInterface:
-    """TP inner cone (slave) stuck to the MP outer cone within ``height`` [m] of the TP's lower edge."""
+def bonded_band(
+    V: fem.FunctionSpace, facet_tags, material: Material, height: float, gamma0: float = 100.0
+) -> ContactInterface:
+    """TP inner cone (slave) stuck to the MP outer cone within ``height`` [m] of the TP's
+    lower edge."""
     if not height > 0:
         raise ValueError(f"bonded band height must be positive, got {height} m")
-    contact = NitscheContact(V, facet_tags, tags.TP_CONTACT, tags.MP_CONTACT, material, FrictionLaw(),
-                             gamma0=gamma0, theta=1)
+    contact = NitscheContact(
+        V,
+        facet_tags,
+        tags.TP_CONTACT,
+        tags.MP_CONTACT,
+        material,
+        FrictionLaw(),
+        gamma0=gamma0,
+        theta=1,
+    )
     return ContactInterface(contact, contact.band_status(height))

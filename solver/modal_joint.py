@@ -8,6 +8,7 @@ Settings come from the ``[modal]`` table of a case file (all optional)::
     band_height = 0.05   # bonded band at the TP lower edge [m]
     gamma0 = 100.0       # Nitsche parameter of the tie [-]
     zeta = 0.01          # modal damping ratio for the resonant indicators [-]
+    clamped = ["MP_CLAMPED"]  # facet groups held fixed: MP_CLAMPED and/or TP_TOP; [] = free
 """
 
 import time
@@ -29,6 +30,9 @@ from solver.modal import EigenOptions, ModalResult, clamp, modal_analysis
 from solver.modal_interface import ContactInterface, bonded_band
 
 
+CLAMPABLE = ("MP_CLAMPED", "TP_TOP")  #: end conditions: facet groups that may be clamped
+
+
 @dataclass(frozen=True)
 class ModalSettings:
     """Discretisation and coupling of the joint's modal analysis (SI units)."""
@@ -38,6 +42,7 @@ class ModalSettings:
     band_height: float = 0.05  #: [m]
     gamma0: float = 100.0  #: [-]
     zeta: float = 0.01  #: [-]
+    clamped: tuple[str, ...] = ("MP_CLAMPED",)  #: names in geometry.tags of clamped facet groups
 
     def __post_init__(self) -> None:
         if self.degree not in (1, 2, 3, 4):
@@ -50,9 +55,17 @@ class ModalSettings:
             raise ValueError(f"gamma0 must be positive, got {self.gamma0}")
         if not 0 < self.zeta < 1:
             raise ValueError(f"zeta must lie in (0, 1), got {self.zeta}")
+        unknown = set(self.clamped) - set(CLAMPABLE)
+        if unknown:
+            raise ValueError(
+                f"clamped: unknown facet group(s) {sorted(unknown)}; choose from {CLAMPABLE}"
+            )
 
     @classmethod
     def from_dict(cls, data: dict[str, Any]) -> "ModalSettings":
+        data = dict(data)
+        if "clamped" in data:
+            data["clamped"] = tuple(data["clamped"])
         return construct(cls, data, "modal")
 
 
@@ -69,8 +82,12 @@ class JointCase:
     def from_dict(cls, case: dict[str, Any]) -> "JointCase":
         if "geometry" not in case:
             raise ValueError(f"{case.get('_source', 'case')}: no [geometry] table")
-        return cls(JointGeometry.from_dict(case["geometry"]), material_from_dict(case.get("material", {})),
-                   MeshOptions.from_dict(case.get("mesh", {})), ModalSettings.from_dict(case.get("modal", {})))
+        return cls(
+            JointGeometry.from_dict(case["geometry"]),
+            material_from_dict(case.get("material", {})),
+            MeshOptions.from_dict(case.get("mesh", {})),
+            ModalSettings.from_dict(case.get("modal", {})),
+        )
 
 
 @dataclass
@@ -83,22 +100,35 @@ class JointModes:
     timings_s: dict[str, float]
 
 
-def joint_modes(comm: MPI.Comm, case: JointCase, log: Callable[[str], None] = lambda s: None) -> JointModes:
-    """Lowest modes of the installed joint: MP bottom clamped, TP top free, TP tied to the
-    MP over ``band_height`` at its lower edge (collective)."""
+def joint_modes(
+    comm: MPI.Comm, case: JointCase, log: Callable[[str], None] = lambda s: None
+) -> JointModes:
+    """Lowest modes of the installed joint: by default MP bottom clamped and TP top free; the
+    TP tied to the MP over ``band_height`` at its lower edge (collective)."""
     t0 = time.perf_counter()
     mesh_data = create_joint_mesh(comm, case.joint, case.mesh)
     V = fem.functionspace(mesh_data.mesh, ("Lagrange", case.modal.degree, (3,)))
     n_dofs = V.dofmap.index_map.size_global * V.dofmap.index_map_bs
     t1 = time.perf_counter()
-    log(f"mesh: {case.mesh.n_circumferential} around, {case.mesh.axial_size} m axially, degree "
-        f"{case.modal.degree}: {n_dofs} dofs ({t1 - t0:.1f} s)")
-    bc = clamp(V, mesh_data.facet_tags, [tags.MP_CLAMPED])
-    interface = bonded_band(V, mesh_data.facet_tags, case.material, case.modal.band_height, case.modal.gamma0)
+    log(
+        f"mesh: {case.mesh.n_circumferential} around, {case.mesh.axial_size} m axially, degree "
+        f"{case.modal.degree}: {n_dofs} dofs ({t1 - t0:.1f} s)"
+    )
+    clamped = [getattr(tags, name) for name in case.modal.clamped]
+    bcs = [clamp(V, mesh_data.facet_tags, clamped)] if clamped else []
+    interface = bonded_band(
+        V, mesh_data.facet_tags, case.material, case.modal.band_height, case.modal.gamma0
+    )
     t2 = time.perf_counter()
-    log(f"bonded band {1e3 * case.modal.band_height:.0f} mm: {100 * interface.tied_fraction():.1f} % of the "
-        f"TP contact points tied ({t2 - t1:.1f} s)")
-    result = modal_analysis(V, case.material, [bc], [interface], EigenOptions(n_modes=case.modal.n_modes))
+    log(
+        f"bonded band {1e3 * case.modal.band_height:.0f} mm: "
+        f"{100 * interface.tied_fraction():.1f} % of the "
+        f"TP contact points tied ({t2 - t1:.1f} s)"
+    )
+    options = EigenOptions(n_modes=case.modal.n_modes)
+    result = modal_analysis(V, case.material, bcs, [interface], options)
     t3 = time.perf_counter()
     log(f"eigenproblem: {len(result.frequencies_hz)} modes ({t3 - t2:.1f} s)")
-    return JointModes(result, mesh_data, interface, {"mesh": t1 - t0, "interface": t2 - t1, "eigen": t3 - t2})
+    return JointModes(
+        result, mesh_data, interface, {"mesh": t1 - t0, "interface": t2 - t1, "eigen": t3 - t2}
+    )

@@ -79,9 +79,14 @@ class JointParts:
 
         top = shaker_point(joint.tp, joint.tp_offset, joint.tp.total_length, 0.0)
         top[2] -= 1e-6 * joint.tp.total_length  # just inside the top face
-        return cls(mesh_data.cell_tags, tags.MP_VOLUME, tags.TP_VOLUME,
-                   TopFaceLoad(V, mesh_data.facet_tags, tags.TP_TOP), PointLoad(V, top),
-                   InterfaceSampler.for_joint(V, joint))
+        return cls(
+            mesh_data.cell_tags,
+            tags.MP_VOLUME,
+            tags.TP_VOLUME,
+            TopFaceLoad(V, mesh_data.facet_tags, tags.TP_TOP),
+            PointLoad(V, top),
+            InterfaceSampler.for_joint(V, joint),
+        )
 
 
 def degenerate_groups(frequencies_hz: np.ndarray, rtol: float = 1e-6) -> list[list[int]]:
@@ -95,8 +100,14 @@ def degenerate_groups(frequencies_hz: np.ndarray, rtol: float = 1e-6) -> list[li
     return groups
 
 
-def describe_modes(result: ModalResult, material: Material, parts: JointParts, zeta: float = 0.01,
-                   n_stations: int = 24, m_max: int = 12) -> list[ModeRecord]:
+def describe_modes(
+    result: ModalResult,
+    material: Material,
+    parts: JointParts,
+    zeta: float = 0.01,
+    n_stations: int = 24,
+    m_max: int = 12,
+) -> list[ModeRecord]:
     """Classify every mode and compute its indicators (collective)."""
     if not 0 < zeta < 1:
         raise ValueError(f"damping ratio zeta must lie in (0, 1), got {zeta}")
@@ -108,27 +119,45 @@ def describe_modes(result: ModalResult, material: Material, parts: JointParts, z
         w_tp = classify(u, tp_cells, n_stations, m_max)
         kinetic, strain = energy_shares(u, material, parts.cell_tags, [parts.mp_tag, parts.tp_tag])
         dominant, w = ("TP", w_tp) if kinetic[1] >= 0.5 else ("MP", w_mp)
-        g = {f"{d}_{kind}": modal_force(u, load.vectors[c])
-             for kind, load in (("face", parts.face), ("point", parts.point))
-             for d, c in (("axial", 2), ("lateral", 0))}
-        rows.append(dict(
-            mode=i + 1, frequency_Hz=float(f), m=w.m, n=w.n, dominant_part=dominant,
-            m_MP=w_mp.m, n_MP=w_mp.n, m_TP=w_tp.m, n_TP=w_tp.n,
-            kinetic_share_TP=float(kinetic[1]), strain_share_TP=float(strain[1]),
-            **{f"participation_{k}_per_sqrtkg": abs(v) for k, v in g.items()},
-            interface_slip_rms_per_sqrtkg=parts.interface.rms_slip(u),
-        ))
+        g = {
+            f"{d}_{kind}": modal_force(u, load.vectors[c])
+            for kind, load in (("face", parts.face), ("point", parts.point))
+            for d, c in (("axial", 2), ("lateral", 0))
+        }
+        rows.append(
+            dict(
+                mode=i + 1,
+                frequency_Hz=float(f),
+                m=w.m,
+                n=w.n,
+                dominant_part=dominant,
+                m_MP=w_mp.m,
+                n_MP=w_mp.n,
+                m_TP=w_tp.m,
+                n_TP=w_tp.n,
+                kinetic_share_TP=float(kinetic[1]),
+                strain_share_TP=float(strain[1]),
+                **{f"participation_{k}_per_sqrtkg": abs(v) for k, v in g.items()},
+                interface_slip_rms_per_sqrtkg=parts.interface.rms_slip(u),
+            )
+        )
     # The orientation of a degenerate pair (cos/sin of the same m) is arbitrary: a force
     # excites the pair's combination, so resonant slips use the group's root-sum-square.
     for group in degenerate_groups(result.frequencies_hz):
         f = float(np.mean(result.frequencies_hz[group]))
         force = float(eccentric_amplitude(f))
-        slip = float(np.sqrt(np.mean([rows[k]["interface_slip_rms_per_sqrtkg"] ** 2 for k in group])))
+        slip = float(
+            np.sqrt(np.mean([rows[k]["interface_slip_rms_per_sqrtkg"] ** 2 for k in group]))
+        )
         for d in ("axial", "lateral"):
-            g = float(np.sqrt(sum(rows[k][f"participation_{d}_point_per_sqrtkg"] ** 2 for k in group)))
+            g = float(
+                np.sqrt(sum(rows[k][f"participation_{d}_point_per_sqrtkg"] ** 2 for k in group))
+            )
             for k in group:
                 rows[k][f"resonant_slip_{d}_um"] = 1e6 * resonant_slip(g, slip, f, force, zeta)
-    score = np.array([max(r["resonant_slip_axial_um"], r["resonant_slip_lateral_um"]) for r in rows])
+    score = np.array(
+        [max(r["resonant_slip_axial_um"], r["resonant_slip_lateral_um"]) for r in rows]
+    )
     distinct = np.unique(np.round(-score, 12))
     rank = 1 + np.searchsorted(distinct, np.round(-score, 12))
     return [ModeRecord(**r, rank=int(k)) for r, k in zip(rows, rank)]
@@ -141,21 +170,27 @@ def write_csv(records: list[ModeRecord], path: str | Path, comm: MPI.Comm) -> No
             writer = csv.DictWriter(f, fieldnames=list(asdict(records[0])))
             writer.writeheader()
             for r in records:
-                writer.writerow({k: (f"{v:.6g}" if isinstance(v, float) else v) for k, v in asdict(r).items()})
+                writer.writerow(
+                    {k: (f"{v:.6g}" if isinstance(v, float) else v) for k, v in asdict(r).items()}
+                )
 
 
 def format_table(records: list[ModeRecord]) -> str:
     """Human-readable table of the records (participations in 1/sqrt(kg), slips in um)."""
-    head = (f"{'mode':>4} {'f [Hz]':>9} {'m':>2} {'n':>2} {'part':>4} {'MP m,n':>7} {'TP m,n':>7} "
-            f"{'KE_TP':>5} {'Gax_face':>8} {'Glat_face':>9} {'Gax_pt':>8} {'Glat_pt':>8} {'slip':>8} "
-            f"{'s_ax[um]':>9} {'s_lat[um]':>9} {'rank':>4}")
+    head = (
+        f"{'mode':>4} {'f [Hz]':>9} {'m':>2} {'n':>2} {'part':>4} {'MP m,n':>7} {'TP m,n':>7} "
+        f"{'KE_TP':>5} {'Gax_face':>8} {'Glat_face':>9} {'Gax_pt':>8} {'Glat_pt':>8} {'slip':>8} "
+        f"{'s_ax[um]':>9} {'s_lat[um]':>9} {'rank':>4}"
+    )
     lines = [head]
     for r in records:
         lines.append(
             f"{r.mode:4d} {r.frequency_Hz:9.2f} {r.m:2d} {r.n:2d} {r.dominant_part:>4} "
             f"{f'{r.m_MP},{r.n_MP}':>7} {f'{r.m_TP},{r.n_TP}':>7} {r.kinetic_share_TP:5.2f} "
-            f"{r.participation_axial_face_per_sqrtkg:8.1e} {r.participation_lateral_face_per_sqrtkg:9.1e} "
-            f"{r.participation_axial_point_per_sqrtkg:8.1e} {r.participation_lateral_point_per_sqrtkg:8.1e} "
+            f"{r.participation_axial_face_per_sqrtkg:8.1e} "
+            f"{r.participation_lateral_face_per_sqrtkg:9.1e} "
+            f"{r.participation_axial_point_per_sqrtkg:8.1e} "
+            f"{r.participation_lateral_point_per_sqrtkg:8.1e} "
             f"{r.interface_slip_rms_per_sqrtkg:8.1e} {r.resonant_slip_axial_um:9.3g} "
             f"{r.resonant_slip_lateral_um:9.3g} {r.rank:4d}"
         )
@@ -173,15 +208,22 @@ def write_paraview(result: ModalResult, path: str | Path) -> Path:
     return path
 
 
-def plot_modes(result: ModalResult, records: list[ModeRecord], path: str | Path, n_cols: int = 5,
-               window: tuple[int, int] = (1600, 1000)) -> None:
+def plot_modes(
+    result: ModalResult,
+    records: list[ModeRecord],
+    path: str | Path,
+    n_cols: int = 5,
+    window: tuple[int, int] = (1600, 1000),
+) -> None:
     """PNG grid of the deformed shapes, coloured by |u| and labelled f, m, n (rank 0 draws)."""
     os.environ.setdefault("PYVISTA_OFF_SCREEN", "true")
     V = result.V
     comm = V.mesh.comm
     topology, cell_types, x = plot.vtk_mesh(V)
     n_nodes = x.shape[0]
-    pieces = comm.gather((topology, cell_types, x, [u.x.array.reshape(-1, 3)[:n_nodes] for u in result.modes]))
+    pieces = comm.gather(
+        (topology, cell_types, x, [u.x.array.reshape(-1, 3)[:n_nodes] for u in result.modes])
+    )
     if comm.rank != 0:
         return
     import pyvista
@@ -202,23 +244,35 @@ def plot_modes(result: ModalResult, records: list[ModeRecord], path: str | Path,
     grid = pyvista.UnstructuredGrid(np.concatenate(topo), np.concatenate(types), np.concatenate(xs))
     size = np.ptp(grid.points, axis=0).max()
     n_rows = int(np.ceil(len(records) / n_cols))
-    plotter = pyvista.Plotter(shape=(n_rows, n_cols), off_screen=True, window_size=window, border=False)
+    plotter = pyvista.Plotter(
+        shape=(n_rows, n_cols), off_screen=True, window_size=window, border=False
+    )
     for k, r in enumerate(records):
         u = np.concatenate(shapes[k])
         grid.point_data["u"] = u
         grid.point_data["|u|"] = np.linalg.norm(u, axis=1)
         warped = grid.warp_by_vector("u", factor=0.1 * size / max(np.abs(u).max(), 1e-300))
         plotter.subplot(k // n_cols, k % n_cols)
-        plotter.add_mesh(warped.extract_surface(algorithm="dataset_surface", nonlinear_subdivision=1), scalars="|u|", cmap="viridis",
-                         show_scalar_bar=False)
-        plotter.add_text(f"{r.mode}: {r.frequency_Hz:.1f} Hz  m={r.m} n={r.n} ({r.dominant_part})", font_size=8)
+        plotter.add_mesh(
+            warped.extract_surface(algorithm="dataset_surface", nonlinear_subdivision=1),
+            scalars="|u|",
+            cmap="viridis",
+            show_scalar_bar=False,
+        )
+        plotter.add_text(
+            f"{r.mode}: {r.frequency_Hz:.1f} Hz  m={r.m} n={r.n} ({r.dominant_part})", font_size=8
+        )
         plotter.view_isometric()
     plotter.screenshot(str(path))
     plotter.close()
 
 
-def write_outputs(result: ModalResult, records: list[ModeRecord], folder: str | Path,
-                  names: Mapping[str, str] | None = None) -> dict[str, Path]:
+def write_outputs(
+    result: ModalResult,
+    records: list[ModeRecord],
+    folder: str | Path,
+    names: Mapping[str, str] | None = None,
+) -> dict[str, Path]:
     """CSV, PNG and VTX files of a modal analysis in ``folder``; returns their paths."""
     names = {"csv": "modes.csv", "png": "modes.png", "vtx": "modes.bp", **(names or {})}
     folder = Path(folder)

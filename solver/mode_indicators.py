@@ -36,7 +36,9 @@ def energy_shares(
     kinetic, strain = [], []
     for tag in part_tags:
         kinetic.append(fem.assemble_scalar(fem.form(material.rho * ufl.inner(u, u) * dx(tag))))
-        strain.append(fem.assemble_scalar(fem.form(ufl.inner(sigma(u, material), epsilon(u)) * dx(tag))))
+        strain.append(
+            fem.assemble_scalar(fem.form(ufl.inner(sigma(u, material), epsilon(u)) * dx(tag)))
+        )
     comm = u.function_space.mesh.comm
     kinetic = np.array([comm.allreduce(k, op=MPI.SUM) for k in kinetic])
     strain = np.array([comm.allreduce(s, op=MPI.SUM) for s in strain])
@@ -89,20 +91,25 @@ class InterfaceSampler:
         return float(np.sqrt(np.mean(self.slip(u) ** 2)))
 
     @classmethod
-    def for_joint(cls, V: fem.FunctionSpace, joint, n_heights: int = 24, n_theta: int = 36) -> "InterfaceSampler":
-        """Sampler over the overlap of a ``geometry.parameters.JointGeometry`` (TP at first contact):
+    def for_joint(
+        cls, V: fem.FunctionSpace, joint, n_heights: int = 24, n_theta: int = 36
+    ) -> "InterfaceSampler":
+        """Sampler over the overlap of a ``geometry.parameters.JointGeometry`` at first contact:
         heights from the TP's lower edge to the MP's top, points a quarter wall inside each wall."""
         z_lo, z_hi = joint.tp_offset, joint.mp.total_length
         z = np.linspace(z_lo, z_hi, n_heights + 2)[1:-1]
         return cls(
-            V, z,
+            V,
+            z,
             r_tp=lambda zz: joint.tp.inner_radius(zz - joint.tp_offset) + 0.25 * joint.tp.thickness,
             r_mp=lambda zz: joint.mp.outer_radius(zz) - 0.25 * joint.mp.thickness,
             n_theta=n_theta,
         )
 
 
-def resonant_slip(participation: float, rms_slip: float, f_hz: float, force_n: float, zeta: float) -> float:
+def resonant_slip(
+    participation: float, rms_slip: float, f_hz: float, force_n: float, zeta: float
+) -> float:
     """Slip amplitude at resonance [m]: |phi^T f| F / (2 zeta omega^2) * slip_rms."""
     omega2 = (2 * np.pi * f_hz) ** 2
     return abs(participation) * force_n / (2 * zeta * omega2) * rms_slip

@@ -62,7 +62,9 @@ def part_nodes(V: fem.FunctionSpace, cells: np.ndarray | None = None) -> np.ndar
     return nodes[nodes < n_owned]
 
 
-def ring_fourier(u: fem.Function, nodes: np.ndarray, n_stations: int = 24, m_max: int = 12) -> RingFourier:
+def ring_fourier(
+    u: fem.Function, nodes: np.ndarray, n_stations: int = 24, m_max: int = 12
+) -> RingFourier:
     """Least-squares Fourier coefficients of u on ``n_stations`` axial stations (collective)."""
     if n_stations < 2 or m_max < 0:
         raise ValueError(f"need n_stations >= 2 and m_max >= 0, got {n_stations}, {m_max}")
@@ -72,16 +74,22 @@ def ring_fourier(u: fem.Function, nodes: np.ndarray, n_stations: int = 24, m_max
     values = u.x.array.reshape(-1, V.dofmap.index_map_bs)[nodes].real
     theta = np.arctan2(x[:, 1], x[:, 0])
     c, s = np.cos(theta), np.sin(theta)
-    u_cyl = np.column_stack([c * values[:, 0] + s * values[:, 1], -s * values[:, 0] + c * values[:, 1], values[:, 2]])
+    u_cyl = np.column_stack(
+        [c * values[:, 0] + s * values[:, 1], -s * values[:, 0] + c * values[:, 1], values[:, 2]]
+    )
 
     z_lo = comm.allreduce(x[:, 2].min() if len(x) else np.inf, op=MPI.MIN)
     z_hi = comm.allreduce(x[:, 2].max() if len(x) else -np.inf, op=MPI.MAX)
     if not z_hi > z_lo:
         raise ValueError("ring_fourier: the selected nodes span no axial length")
-    station = np.minimum(((x[:, 2] - z_lo) / (z_hi - z_lo) * n_stations).astype(int), n_stations - 1)
+    station = np.minimum(
+        ((x[:, 2] - z_lo) / (z_hi - z_lo) * n_stations).astype(int), n_stations - 1
+    )
 
     k = np.arange(1, m_max + 1)
-    basis = np.column_stack([np.ones_like(theta), np.cos(np.outer(theta, k)), np.sin(np.outer(theta, k))])
+    basis = np.column_stack(
+        [np.ones_like(theta), np.cos(np.outer(theta, k)), np.sin(np.outer(theta, k))]
+    )
     n_basis = basis.shape[1]
     normal = np.zeros((n_stations, n_basis, n_basis))
     rhs = np.zeros((n_stations, n_basis, 3))
@@ -94,12 +102,18 @@ def ring_fourier(u: fem.Function, nodes: np.ndarray, n_stations: int = 24, m_max
     for arr in (normal, rhs, z_sum, n_pts):
         comm.Allreduce(MPI.IN_PLACE, arr, op=MPI.SUM)
 
-    keep = [i for i in range(n_stations) if n_pts[i] >= 2 * n_basis and np.linalg.cond(normal[i]) < 1e8]
+    keep = [
+        i for i in range(n_stations) if n_pts[i] >= 2 * n_basis and np.linalg.cond(normal[i]) < 1e8
+    ]
     if len(keep) < 2:
-        raise ValueError(f"ring_fourier: fewer than 2 stations with enough nodes for m_max = {m_max}")
+        raise ValueError(
+            f"ring_fourier: fewer than 2 stations with enough nodes for m_max = {m_max}"
+        )
     coef = np.array([np.linalg.solve(normal[i], rhs[i]) for i in keep])  # (s, basis, comp)
     cos = np.concatenate([coef[:, :1, :], coef[:, 1 : m_max + 1, :]], axis=1).transpose(0, 2, 1)
-    sin = np.concatenate([np.zeros_like(coef[:, :1, :]), coef[:, m_max + 1 :, :]], axis=1).transpose(0, 2, 1)
+    sin = np.concatenate(
+        [np.zeros_like(coef[:, :1, :]), coef[:, m_max + 1 :, :]], axis=1
+    ).transpose(0, 2, 1)
     return RingFourier(z=z_sum[keep] / n_pts[keep], cos=cos, sin=sin)
 
 
@@ -135,6 +149,8 @@ def wave_numbers(fourier: RingFourier, node_threshold: float = 0.05) -> WaveNumb
     return WaveNumbers(m=m, n=n, m_share=share, component=_COMPONENTS[comp])
 
 
-def classify(u: fem.Function, cells: np.ndarray | None = None, n_stations: int = 24, m_max: int = 12) -> WaveNumbers:
+def classify(
+    u: fem.Function, cells: np.ndarray | None = None, n_stations: int = 24, m_max: int = 12
+) -> WaveNumbers:
     """(m, n) of u on the part made of ``cells`` (all local cells if None). Collective."""
     return wave_numbers(ring_fourier(u, part_nodes(u.function_space, cells), n_stations, m_max))

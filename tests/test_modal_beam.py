@@ -32,8 +32,10 @@ def test_first_bending_frequency_matches_euler_bernoulli():
     # square section: the two bending directions are degenerate
     assert result.frequencies_hz[0] == pytest.approx(f_eb, rel=0.01)
     assert result.frequencies_hz[1] == pytest.approx(result.frequencies_hz[0], rel=1e-8)
-    print(f"cantilever: f1 = {result.frequencies_hz[0]:.4f} Hz, Euler-Bernoulli {f_eb:.4f} Hz, "
-          f"rel. diff {result.frequencies_hz[0] / f_eb - 1:.2e}")
+    print(
+        f"cantilever: f1 = {result.frequencies_hz[0]:.4f} Hz, Euler-Bernoulli {f_eb:.4f} Hz, "
+        f"rel. diff {result.frequencies_hz[0] / f_eb - 1:.2e}"
+    )
 
 
 def test_modes_are_mass_normalised_and_clamped_dofs_inert():
@@ -61,8 +63,12 @@ def test_band_returns_exactly_the_modes_in_it():
 def test_partitioned_and_serial_frequencies_agree():
     """COMM_WORLD (2 ranks under mpiexec) against a COMM_SELF solve of the same problem."""
     options = EigenOptions(n_modes=10)
-    f_world = modal_analysis(*_bc_list(cantilever(MPI.COMM_WORLD, 10)), options=options).frequencies_hz
-    f_self = modal_analysis(*_bc_list(cantilever(MPI.COMM_SELF, 10)), options=options).frequencies_hz
+    f_world = modal_analysis(
+        *_bc_list(cantilever(MPI.COMM_WORLD, 10)), options=options
+    ).frequencies_hz
+    f_self = modal_analysis(
+        *_bc_list(cantilever(MPI.COMM_SELF, 10)), options=options
+    ).frequencies_hz
     np.testing.assert_allclose(f_world, f_self, rtol=1e-8)
 
 
@@ -71,7 +77,9 @@ def _bc_list(space_and_bc):
     return V, STEEL, [bc]
 
 
-@pytest.mark.parametrize("kwargs", [dict(n_modes=0), dict(band_hz=(50.0, 10.0)), dict(target_hz=-1.0), dict(tol=0.0)])
+@pytest.mark.parametrize(
+    "kwargs", [dict(n_modes=0), dict(band_hz=(50.0, 10.0)), dict(target_hz=-1.0), dict(tol=0.0)]
+)
 def test_bad_options_raise(kwargs):
     with pytest.raises(ValueError):
         EigenOptions(**kwargs)

@@ -17,8 +17,12 @@ R, T, L = 0.3, 0.006, 1.4  # mid-surface radius, wall, length [m]
 def tube_space():
     """Q2 space on a hexahedral tube (box mapped to (theta, r, z); the seam is not glued,
     which does not matter for prescribed fields)."""
-    msh = mesh.create_box(MPI.COMM_WORLD, [[0, R - T / 2, 0], [2 * np.pi, R + T / 2, L]], [32, 1, 20],
-                          mesh.CellType.hexahedron)
+    msh = mesh.create_box(
+        MPI.COMM_WORLD,
+        [[0, R - T / 2, 0], [2 * np.pi, R + T / 2, L]],
+        [32, 1, 20],
+        mesh.CellType.hexahedron,
+    )
     x = msh.geometry.x
     theta, r = x[:, 0].copy(), x[:, 1].copy()
     x[:, 0], x[:, 1] = r * np.cos(theta), r * np.sin(theta)
@@ -30,7 +34,9 @@ def axial_shape(n: int, z: np.ndarray) -> np.ndarray:
     return np.sin((2 * n + 1) * np.pi * z / (2 * L))
 
 
-def synthetic_mode(V, m: int, n: int, phase: float, component: str, noise: float = 0.0) -> fem.Function:
+def synthetic_mode(
+    V, m: int, n: int, phase: float, component: str, noise: float = 0.0
+) -> fem.Function:
     """u_c = cos(m theta + phase) g_n(z) in cylindrical component c, plus small noise."""
     u = fem.Function(V)
 
@@ -50,8 +56,18 @@ def synthetic_mode(V, m: int, n: int, phase: float, component: str, noise: float
 
 @pytest.mark.parametrize(
     "m, n, component",
-    [(2, 0, "r"), (2, 1, "r"), (3, 0, "r"), (4, 2, "r"), (6, 1, "r"), (1, 0, "r"), (1, 3, "r"),
-     (0, 0, "z"), (0, 1, "theta"), (5, 0, "theta")],
+    [
+        (2, 0, "r"),
+        (2, 1, "r"),
+        (3, 0, "r"),
+        (4, 2, "r"),
+        (6, 1, "r"),
+        (1, 0, "r"),
+        (1, 3, "r"),
+        (0, 0, "z"),
+        (0, 1, "theta"),
+        (5, 0, "theta"),
+    ],
 )
 def test_known_wave_numbers(tube_space, m, n, component):
     u = synthetic_mode(tube_space, m, n, phase=0.4, component=component, noise=0.01)

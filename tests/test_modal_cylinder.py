@@ -27,8 +27,13 @@ BENCH = Material(E=200e9, nu=0.3, rho=7800.0)
 
 def tube(R: float, h: float, L: float, options: MeshOptions, degree: int):
     """Straight tube of mid-surface radius R, wall h, length L [m] and its Lagrange space."""
-    part = ConePart(half_angle_deg=0.0, bottom_outer_diameter=2 * (R + h / 2), cone_length=L,
-                    straight_length=0.0, thickness=h)
+    part = ConePart(
+        half_angle_deg=0.0,
+        bottom_outer_diameter=2 * (R + h / 2),
+        cone_length=L,
+        straight_length=0.0,
+        thickness=h,
+    )
     mesh_data = create_tube_mesh(MPI.COMM_WORLD, part, options)
     return mesh_data, fem.functionspace(mesh_data.mesh, ("Lagrange", degree, (3,)))
 
@@ -57,7 +62,10 @@ def test_clamped_free_lowest_frequency_per_m(clamped_free, m):
     freqs, labels, (R, h, L) = clamped_free
     fe = min(f for f, w in zip(freqs, labels) if w.m == m)
     ritz = cylinder_frequencies(R, h, L, STEEL, m)[0]
-    print(f"clamped-free m = {m}: solid {fe:.3f} Hz, Sanders-Ritz {ritz:.3f} Hz, rel. diff {fe / ritz - 1:+.2e}")
+    print(
+        f"clamped-free m = {m}: solid {fe:.3f} Hz, Sanders-Ritz {ritz:.3f} Hz, "
+        f"rel. diff {fe / ritz - 1:+.2e}"
+    )
     assert fe == pytest.approx(ritz, rel=0.03)
 
 
@@ -67,12 +75,16 @@ def test_clamped_free_every_mode_in_its_analytic_family(clamped_free):
         family = cylinder_frequencies(R, h, L, STEEL, w.m)[w.n]
         assert f == pytest.approx(family, rel=0.03), f"{f:.2f} Hz labelled (m, n) = ({w.m}, {w.n})"
     # axisymmetric shells: modes m >= 1 come in degenerate pairs
-    assert all(labels[i].m == labels[i + 1].m and labels[i].n == labels[i + 1].n for i in range(0, 12, 2))
+    assert all(
+        labels[i].m == labels[i + 1].m and labels[i].n == labels[i + 1].n for i in range(0, 12, 2)
+    )
 
 
 def test_clamped_clamped_benchmark():
     """R = 0.1 m, L = 0.4 m, t = 0.01 m: lowest mode (m, n) = (2, 0) at about 1701 Hz."""
-    mesh_data, V = tube(0.1, 0.01, 0.4, MeshOptions(n_circumferential=24, axial_size=0.04), degree=3)
+    mesh_data, V = tube(
+        0.1, 0.01, 0.4, MeshOptions(n_circumferential=24, axial_size=0.04), degree=3
+    )
     bc = clamp(V, mesh_data.facet_tags, [tags.BOTTOM, tags.TOP])
     result = modal_analysis(V, BENCH, [bc], options=EigenOptions(n_modes=4))
     w = classify(result.modes[0])

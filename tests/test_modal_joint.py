@@ -50,8 +50,12 @@ def stacked_columns(comm: MPI.Comm) -> dolfinx.io.gmsh.MeshData:
         (mp_base, mp_top, mp_vol), (tp_base, tp_top, tp_vol) = bodies
         gmsh.model.addPhysicalGroup(3, [mp_vol], tags.MP_VOLUME)
         gmsh.model.addPhysicalGroup(3, [tp_vol], tags.TP_VOLUME)
-        for tag, surface in ((tags.MP_CLAMPED, mp_base), (tags.MP_CONTACT, mp_top),
-                             (tags.TP_CONTACT, tp_base), (tags.TP_TOP, tp_top)):
+        for tag, surface in (
+            (tags.MP_CLAMPED, mp_base),
+            (tags.MP_CONTACT, mp_top),
+            (tags.TP_CONTACT, tp_base),
+            (tags.TP_TOP, tp_top),
+        ):
             gmsh.model.addPhysicalGroup(2, [surface], tag)
         gmsh.model.mesh.generate(3)
     mesh_data = dolfinx.io.gmsh.model_to_mesh(gmsh.model, comm, 0, gdim=3)
@@ -74,13 +78,19 @@ def test_bonded_interface_recovers_the_monolithic_column(stack):
     assert tie.tied_fraction() == 1.0  # a flat interface lies entirely in the band
     tied = modal_analysis(V, STEEL, [bc], [tie], EigenOptions(n_modes=4)).frequencies_hz
 
-    box = mesh.create_box(MPI.COMM_WORLD, [[0, 0, 0], [A, A, 2 * H]], [3, 3, 20], mesh.CellType.hexahedron)
+    box = mesh.create_box(
+        MPI.COMM_WORLD, [[0, 0, 0], [A, A, 2 * H]], [3, 3, 20], mesh.CellType.hexahedron
+    )
     W = fem.functionspace(box, ("Lagrange", 2, (3,)))
     base = mesh.locate_entities_boundary(box, 2, lambda x: np.isclose(x[2], 0.0))
     bc_box = fem.dirichletbc(np.zeros(3), fem.locate_dofs_topological(W, 2, base), W)
     single = modal_analysis(W, STEEL, [bc_box], options=EigenOptions(n_modes=4)).frequencies_hz
 
-    f_eb = 1.8751040687119611**2 / (2 * np.pi) * np.sqrt(STEEL.E * A**2 / 12 / (STEEL.rho * (2 * H) ** 4))
+    f_eb = (
+        1.8751040687119611**2
+        / (2 * np.pi)
+        * np.sqrt(STEEL.E * A**2 / 12 / (STEEL.rho * (2 * H) ** 4))
+    )
     print(f"tied {tied[0]:.3f} Hz, monolithic {single[0]:.3f} Hz, Euler-Bernoulli {f_eb:.3f} Hz")
     np.testing.assert_allclose(tied, single, rtol=5e-3)
     assert tied[0] == pytest.approx(f_eb, rel=0.01)
@@ -94,7 +104,9 @@ def test_interface_states_order_the_frequencies(stack):
     freqs = {}
     for status in (Status.OPEN, Status.SLIP, Status.STICK):
         interface = ContactInterface(contact, status)
-        freqs[status] = modal_analysis(V, STEEL, [bc], [interface], EigenOptions(n_modes=6)).frequencies_hz
+        freqs[status] = modal_analysis(
+            V, STEEL, [bc], [interface], EigenOptions(n_modes=6)
+        ).frequencies_hz
     # open: the upper block floats free (6 rigid modes near 0 Hz)
     assert np.all(freqs[Status.OPEN] < 1.0)
     assert np.all(freqs[Status.SLIP][:2] <= freqs[Status.STICK][:2] * (1 + 1e-10))
@@ -107,8 +119,16 @@ def test_interface_states_order_the_frequencies(stack):
 
 def test_nitsche_parameter_barely_matters(stack):
     mesh_data, V, bc = stack
-    f = [modal_analysis(V, STEEL, [bc], [bonded_band(V, mesh_data.facet_tags, STEEL, 1e-3, gamma0=g)],
-                        EigenOptions(n_modes=4)).frequencies_hz for g in (100.0, 1000.0)]
+    f = [
+        modal_analysis(
+            V,
+            STEEL,
+            [bc],
+            [bonded_band(V, mesh_data.facet_tags, STEEL, 1e-3, gamma0=g)],
+            EigenOptions(n_modes=4),
+        ).frequencies_hz
+        for g in (100.0, 1000.0)
+    ]
     np.testing.assert_allclose(f[0], f[1], rtol=2e-3)
 
 
@@ -130,7 +150,9 @@ def test_joint_partition_independent(quick_joint):
 def test_joint_outputs(quick_joint, tmp_path_factory):
     case, modes = quick_joint
     comm = MPI.COMM_WORLD
-    folder = Path(comm.bcast(str(tmp_path_factory.mktemp("modal")) if comm.rank == 0 else None, root=0))
+    folder = Path(
+        comm.bcast(str(tmp_path_factory.mktemp("modal")) if comm.rank == 0 else None, root=0)
+    )
     parts = JointParts.for_joint(modes.result.V, modes.mesh_data, case.joint)
     records = describe_modes(modes.result, case.material, parts)
     table = format_table(records)
@@ -140,7 +162,11 @@ def test_joint_outputs(quick_joint, tmp_path_factory):
     assert (paths["vtx"]).is_dir()
     with open(paths["csv"]) as f:
         rows = list(csv.DictReader(f))
-    assert len(rows) == len(records) == 6 and "frequency_Hz" in rows[0] and "resonant_slip_axial_um" in rows[0]
+    assert (
+        len(rows) == len(records) == 6
+        and "frequency_Hz" in rows[0]
+        and "resonant_slip_axial_um" in rows[0]
+    )
     assert len(table.splitlines()) == 7
     # axisymmetric joint: the first modes come in degenerate pairs with equal labels and rank
     for a, b in zip(records[0::2], records[1::2]):
@@ -149,4 +175,28 @@ def test_joint_outputs(quick_joint, tmp_path_factory):
     # a uniform top-face force cannot excite m >= 2 of a perfect axisymmetric joint
     for r in records:
         if r.m >= 2:
-            assert r.participation_axial_face_per_sqrtkg < 1e-6 * r.participation_axial_point_per_sqrtkg + 1e-12
+            assert (
+                r.participation_axial_face_per_sqrtkg
+                < 1e-6 * r.participation_axial_point_per_sqrtkg + 1e-12
+            )
+
+
+@pytest.mark.parametrize(
+    "override",
+    [
+        "modal.band_height=-0.05",
+        "modal.clamped=['MP_TOP']",
+        "modal.n_modes=0",
+        "modal.zeta=2.0",
+        "modal.frequency=3",
+    ],
+)
+def test_bad_modal_settings_raise_before_computing(override):
+    with pytest.raises(ValueError, match="modal"):
+        JointCase.from_dict(read_case("scaled", [override]))
+
+
+def test_clamping_a_missing_tag_raises(stack):
+    mesh_data, V, _ = stack
+    with pytest.raises(ValueError, match="99"):
+        clamp(V, mesh_data.facet_tags, [99])
