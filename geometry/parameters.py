@@ -278,8 +278,8 @@ class MeshOptions:
             raise ValueError(f"axial_size must be positive, got {self.axial_size} m")
         if not (isinstance(self.n_layers, int) and self.n_layers >= 1):
             raise ValueError(f"n_layers must be an integer >= 1, got {self.n_layers!r}")
-        if self.geometry_order not in (1, 2, 3):
-            raise ValueError(f"geometry_order must be 1, 2 or 3, got {self.geometry_order!r}")
+        if self.geometry_order not in (1, 2):  # DOLFINx reads gmsh hexahedra up to hex27
+            raise ValueError(f"geometry_order must be 1 or 2, got {self.geometry_order!r}")
 
     @classmethod
     def from_dict(cls, data: dict[str, Any]) -> MeshOptions:

@@ -6,7 +6,8 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from geometry.imperfections import DeviationMap, process_ring_scans, read_deviation_map
+from geometry.imperfections import (DeviationMap, process_ring_scans, read_deviation_map,
+                                    read_imperfection)
 from geometry.parameters import ConePart, load_geometry
 
 CASES = Path(__file__).resolve().parents[1] / "cases"
@@ -166,3 +167,13 @@ def _write(tmp_path: Path, rows: list[str]) -> Path:
     path = tmp_path / "file.csv"
     path.write_text("\n".join(rows) + "\n")
     return path
+
+
+def test_read_imperfection_tells_formats_apart(tp, tmp_path):
+    scans = tmp_path / "scans.csv"
+    write_scans(scans, tp, np.array([0.2, 0.22]), 1.0, np.array([0.0, 10.0]))
+    processed = tmp_path / "map.csv"
+    processed.write_text("\n".join(good_map_rows()) + "\n")
+    assert np.allclose(read_imperfection(scans, tp).deviation,
+                       process_ring_scans(scans, tp).deviation)
+    assert np.allclose(read_imperfection(processed, tp).deviation, 1e-4)
