@@ -34,18 +34,24 @@ QUICK = ["mesh.n_circumferential=24", "mesh.axial_size=0.2"]
 
 def summary(joint: JointGeometry, material: Material) -> list[str]:
     """Derived geometry, in mm and kg."""
-    lines = [f"{'':4}{'cone bottom/top outer D [mm]':>30}{'inner R bottom/top [mm]':>26}"
-             f"{'length cone+straight [mm]':>28}{'mass [kg]':>11}"]
+    lines = [
+        f"{'':4}{'cone bottom/top outer D [mm]':>30}{'inner R bottom/top [mm]':>26}"
+        f"{'length cone+straight [mm]':>28}{'mass [kg]':>11}"
+    ]
     for name, p in (("MP", joint.mp), ("TP", joint.tp)):
+        d_b, d_t = p.bottom_outer_diameter * 1e3, p.derived_top_outer_diameter * 1e3
+        r_b, r_t = (float(p.inner_radius(z)) * 1e3 for z in (p.cone_bottom_z, p.cone_top_z))
+        cone, straight = p.cone_length * 1e3, p.straight_length * 1e3
         lines.append(
-            f"{name:4}{p.bottom_outer_diameter * 1e3:>19.2f} / {p.derived_top_outer_diameter * 1e3:8.2f}"
-            f"{float(p.inner_radius(p.cone_bottom_z)) * 1e3:>15.2f} / {float(p.inner_radius(p.cone_top_z)) * 1e3:8.2f}"
-            f"{p.cone_length * 1e3:>17.1f} + {p.straight_length * 1e3:7.1f}{p.mass(material):>11.1f}")
+            f"{name:4}{d_b:>19.2f} / {d_t:8.2f}{r_b:>15.2f} / {r_t:8.2f}"
+            f"{cone:>17.1f} + {straight:7.1f}{p.mass(material):>11.1f}"
+        )
+    z_fc, overlap = joint.first_contact_height * 1e3, joint.overlap * 1e3
+    slip, full = joint.required_slip * 1e3, joint.full_contact_overlap * 1e3
     lines += [
-        f"first contact: TP lower edge at z = {joint.first_contact_height * 1e3:.2f} mm "
-        f"(MP bottom at 0), overlap {joint.overlap * 1e3:.2f} mm",
-        f"required slip to full contact (SPEC 2.2): {joint.required_slip * 1e3:.2f} mm "
-        f"(overlap then {joint.full_contact_overlap * 1e3:.2f} mm)",
+        f"first contact: TP lower edge at z = {z_fc:.2f} mm (MP bottom at 0), "
+        f"overlap {overlap:.2f} mm",
+        f"required slip to full contact (SPEC 2.2): {slip:.2f} mm (overlap then {full:.2f} mm)",
     ]
     return lines
 
@@ -53,12 +59,26 @@ def summary(joint: JointGeometry, material: Material) -> list[str]:
 def main(argv: list[str] | None = None) -> int:
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     parser.add_argument("--case", default="scaled", help="case file or preset name (cases/*.toml)")
-    parser.add_argument("--set", action="append", default=[], metavar="KEY=VALUE",
-                        help="override a case entry, e.g. mesh.n_layers=2")
-    parser.add_argument("--imperfection", action="append", default=[], metavar="PART=FILE",
-                        help="measured deviations of part mp or tp: processed map or raw ring scans (CSV)")
-    parser.add_argument("--tp-ovality-mm", type=float, default=0.0,
-                        help="add a synthetic m = 2 ovality of this amplitude [mm] to the TP")
+    parser.add_argument(
+        "--set",
+        action="append",
+        default=[],
+        metavar="KEY=VALUE",
+        help="override a case entry, e.g. mesh.n_layers=2",
+    )
+    parser.add_argument(
+        "--imperfection",
+        action="append",
+        default=[],
+        metavar="PART=FILE",
+        help="measured deviations of part mp or tp: processed map or raw ring scans (CSV)",
+    )
+    parser.add_argument(
+        "--tp-ovality-mm",
+        type=float,
+        default=0.0,
+        help="add a synthetic m = 2 ovality of this amplitude [mm] to the TP",
+    )
     parser.add_argument("--quick", action="store_true", help="coarse mesh (24 around, 0.2 m along)")
     parser.add_argument("--output", default="output/geometry", help="output folder")
     args = parser.parse_args(argv)
@@ -70,7 +90,8 @@ def main(argv: list[str] | None = None) -> int:
 
     try:
         joint, material, options = geometry_from_case(
-            read_case(args.case, (QUICK if args.quick else []) + args.set))
+            read_case(args.case, (QUICK if args.quick else []) + args.set)
+        )
         imperfections = {}
         for item in args.imperfection:
             name, sep, path = item.partition("=")
@@ -92,18 +113,23 @@ def main(argv: list[str] | None = None) -> int:
     mesh_data = create_joint_mesh(comm, joint, options, imperfections)
     mesh = mesh_data.mesh
     V = dolfinx.fem.functionspace(mesh, ("Lagrange", 2, (3,)))
-    log(f"mesh: {options.n_circumferential} around, {options.axial_size * 1e3:.0f} mm along, "
+    log(
+        f"mesh: {options.n_circumferential} around, {options.axial_size * 1e3:.0f} mm along, "
         f"{options.n_layers} layer(s), geometry order {options.geometry_order} "
-        f"(hex{(options.geometry_order + 1) ** 3})")
-    log(f"  cells {mesh.topology.index_map(3).size_global}, geometry nodes "
+        f"(hex{(options.geometry_order + 1) ** 3})"
+    )
+    log(
+        f"  cells {mesh.topology.index_map(3).size_global}, geometry nodes "
         f"{mesh.geometry.index_map().size_global}, P2 vector DOFs "
-        f"{V.dofmap.index_map.size_global * V.dofmap.index_map_bs}")
+        f"{V.dofmap.index_map.size_global * V.dofmap.index_map_bs}"
+    )
     n_facets = mesh.topology.index_map(2).size_local
     n_cells = mesh.topology.index_map(3).size_local
     for tag, name in tags.JOINT_NAMES.items():
         is_cell = tag in (tags.MP_VOLUME, tags.TP_VOLUME)
-        meshtags, n_owned = ((mesh_data.cell_tags, n_cells) if is_cell
-                             else (mesh_data.facet_tags, n_facets))
+        meshtags, n_owned = (
+            (mesh_data.cell_tags, n_cells) if is_cell else (mesh_data.facet_tags, n_facets)
+        )
         count = comm.allreduce(int(np.sum(meshtags.find(tag) < n_owned)))
         log(f"  tag {tag:2d} {name:11s}: {count} {'cells' if is_cell else 'facets'}")
 
@@ -114,18 +140,28 @@ def main(argv: list[str] | None = None) -> int:
     log(f"  ParaView: {write_paraview(mesh_data, out / 'joint')}")
 
     if comm.rank == 0:  # rigid contact map: analytic surfaces, serial numpy
-        cmap = rigid_contact_map(joint, imperfections, n_theta=180 if args.quick else 360,
-                                 n_zeta=100 if args.quick else 400)
-        print(f"rigid contact map: first contact at overlap {cmap.first_contact_overlap * 1e3:.2f} mm "
-              f"(perfect cones: {joint.overlap * 1e3:.2f} mm)")
+        cmap = rigid_contact_map(
+            joint,
+            imperfections,
+            n_theta=180 if args.quick else 360,
+            n_zeta=100 if args.quick else 400,
+        )
+        first, perfect = cmap.first_contact_overlap * 1e3, joint.overlap * 1e3
+        print(
+            f"rigid contact map: first contact at overlap {first:.2f} mm (perfect: {perfect:.2f} mm)"
+        )
         for target in (0.25, 0.5, 0.9):
             reached = cmap.overlaps[cmap.contact_fraction >= target]
             at = f"{reached[0] * 1e3:.1f} mm" if reached.size else "not within the sweep"
             print(f"  {target:.0%} of the TP contact surface in contact at overlap {at}")
-        np.savetxt(out / "contact_fraction.csv",
-                   np.column_stack([cmap.overlaps * 1e3, cmap.contact_fraction * 100]),
-                   delimiter=",", header="overlap_mm,contact_fraction_percent", comments="",
-                   fmt="%.6f")
+        np.savetxt(
+            out / "contact_fraction.csv",
+            np.column_stack([cmap.overlaps * 1e3, cmap.contact_fraction * 100]),
+            delimiter=",",
+            header="overlap_mm,contact_fraction_percent",
+            comments="",
+            fmt="%.6f",
+        )
         print(f"  plot: {plot_contact_map(cmap, out / 'contact_map')}")
         print(f"  table: {out / 'contact_fraction.csv'}")
     return 0

@@ -36,11 +36,19 @@ class ContactMap:
     first_contact_overlap: float  #: overlap at first contact [m]
     theta: npt.NDArray[np.float64]  #: grid angles [rad], shape (n_theta,)
     zeta: npt.NDArray[np.float64]  #: TP-local grid heights on the TP cone [m], shape (n_zeta,)
-    onset_overlap: npt.NDArray[np.float64]  #: overlap at which each point first touches [m] (nan: never), (n_zeta, n_theta)
+    onset_overlap: npt.NDArray[
+        np.float64
+    ]  #: overlap at which each point first touches [m] (nan: never), (n_zeta, n_theta)
 
 
-def _gap(joint: JointGeometry, r_tp: np.ndarray, theta: np.ndarray, zeta: np.ndarray,
-         overlap: float, dr_mp: RadialDeviation | None) -> np.ndarray:
+def _gap(
+    joint: JointGeometry,
+    r_tp: np.ndarray,
+    theta: np.ndarray,
+    zeta: np.ndarray,
+    overlap: float,
+    dr_mp: RadialDeviation | None,
+) -> np.ndarray:
     z = joint.mp.total_length - overlap + zeta
     r_mp = np.broadcast_to(joint.mp.outer_radius(z), r_tp.shape)
     if dr_mp is not None:
@@ -59,8 +67,13 @@ class _Surfaces:
     dr_mp: RadialDeviation | None
 
     @classmethod
-    def on_grid(cls, joint: JointGeometry, imperfections: dict[str, RadialDeviation],
-                n_theta: int, n_zeta: int) -> _Surfaces:
+    def on_grid(
+        cls,
+        joint: JointGeometry,
+        imperfections: dict[str, RadialDeviation],
+        n_theta: int,
+        n_zeta: int,
+    ) -> _Surfaces:
         tp = joint.tp
         theta = np.arange(n_theta) * 2 * np.pi / n_theta
         zeta = np.linspace(tp.cone_bottom_z, tp.cone_top_z, n_zeta + 1)
@@ -103,13 +116,16 @@ def first_contact_overlap(
     reach = 2.0 * largest / np.tan(joint.mp.half_angle) + 1e-3 * joint.tp.cone_length
     lo, hi = joint.overlap - reach, joint.overlap + reach
     if surfaces.gap(lo).min() <= 0 or surfaces.gap(hi).min() > 0:
-        raise ValueError(f"no first contact found between overlaps {lo:.6g} m and {hi:.6g} m "
-                         "(imperfections too large for the joint?)")
+        raise ValueError(
+            f"no first contact found between overlaps {lo:.6g} m and {hi:.6g} m "
+            "(imperfections too large for the joint?)"
+        )
     return surfaces.first_contact(lo, hi)
 
 
-def tp_placement(joint: JointGeometry,
-                 imperfections: Mapping[str, RadialDeviation] | None = None) -> float:
+def tp_placement(
+    joint: JointGeometry, imperfections: Mapping[str, RadialDeviation] | None = None
+) -> float:
     """Global z [m] of the TP's lower end at first contact; ``joint.tp_offset`` if perfect."""
     return joint.mp.total_length - first_contact_overlap(joint, imperfections)
 
@@ -131,8 +147,9 @@ def rigid_contact_map(
     imperfections = check_imperfections(imperfections)
     if overlaps is None:
         start = first_contact_overlap(joint, imperfections, n_theta, n_zeta)
-        overlaps = np.linspace(start - 0.1 * joint.tp.cone_length,
-                               start + 2.0 * joint.required_slip, 201)
+        overlaps = np.linspace(
+            start - 0.1 * joint.tp.cone_length, start + 2.0 * joint.required_slip, 201
+        )
     overlaps = np.asarray(overlaps, dtype=np.float64)
     if overlaps.ndim != 1 or overlaps.size < 2 or np.any(np.diff(overlaps) <= 0):
         raise ValueError("overlaps must be an increasing 1D array of at least two values [m]")
@@ -146,7 +163,9 @@ def rigid_contact_map(
 
     previous = surfaces.gap(overlaps[0])
     if np.any(previous <= 0.0):
-        raise ValueError(f"already in contact at overlap {overlaps[0]:.6g} m: start the overlaps lower")
+        raise ValueError(
+            f"already in contact at overlap {overlaps[0]:.6g} m: start the overlaps lower"
+        )
     fraction = np.zeros(overlaps.size)
     onset = np.full(th.shape, np.nan)
     for k in range(1, overlaps.size):
@@ -160,8 +179,14 @@ def rigid_contact_map(
         g_start = previous[new]
         entered = ~np.isfinite(g_start)
         o_start[entered] = ze[new][entered]
-        g_start[entered] = _gap(joint, surfaces.r_tp[new][entered], th[new][entered],
-                                ze[new][entered], o_start[entered], surfaces.dr_mp)
+        g_start[entered] = _gap(
+            joint,
+            surfaces.r_tp[new][entered],
+            th[new][entered],
+            ze[new][entered],
+            o_start[entered],
+            surfaces.dr_mp,
+        )
         t = np.divide(g_start, g_start - g[new], out=np.zeros_like(g_start), where=g_start > 0)
         onset[new] = o_start + t * (o - o_start)
         previous = g
@@ -182,15 +207,26 @@ def plot_contact_map(result: ContactMap, path: str | Path) -> Path:
     ax_map, ax_curve = fig.subplots(1, 2, width_ratios=[1.6, 1])
     angles = np.degrees(np.append(result.theta, 2 * np.pi))
     onset = np.concatenate([result.onset_overlap, result.onset_overlap[:, :1]], axis=1)
-    mesh = ax_map.pcolormesh(angles, result.zeta * 1e3, onset * 1e3, shading="gouraud", cmap="viridis")
+    mesh = ax_map.pcolormesh(
+        angles, result.zeta * 1e3, onset * 1e3, shading="gouraud", cmap="viridis"
+    )
     fig.colorbar(mesh, ax=ax_map, label="overlap at first touch [mm] (blank: no contact)")
-    ax_map.set(xlabel="angle [deg]", ylabel="height above TP lower edge [mm]",
-               title="TP inner cone: rigid contact onset", xlim=(0, 360))
+    ax_map.set(
+        xlabel="angle [deg]",
+        ylabel="height above TP lower edge [mm]",
+        title="TP inner cone: rigid contact onset",
+        xlim=(0, 360),
+    )
     ax_curve.plot(result.overlaps * 1e3, result.contact_fraction * 100, "-")
-    ax_curve.axvline(result.first_contact_overlap * 1e3, color="k", ls="--",
-                     label=f"first contact {result.first_contact_overlap * 1e3:.1f} mm")
-    ax_curve.set(xlabel="overlap [mm]", ylabel="TP contact surface in contact [%]",
-                 title="contact fraction")
+    ax_curve.axvline(
+        result.first_contact_overlap * 1e3,
+        color="k",
+        ls="--",
+        label=f"first contact {result.first_contact_overlap * 1e3:.1f} mm",
+    )
+    ax_curve.set(
+        xlabel="overlap [mm]", ylabel="TP contact surface in contact [%]", title="contact fraction"
+    )
     ax_curve.legend()
     fig.savefig(path, dpi=120)
     return path

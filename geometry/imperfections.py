@@ -39,7 +39,9 @@ import numpy.typing as npt
 from geometry.parameters import ConePart
 
 #: radial deviation [m] of a part's wall as a function of (angle [rad], part-local z [m])
-RadialDeviation = Callable[[npt.NDArray[np.float64], npt.NDArray[np.float64]], npt.NDArray[np.float64]]
+RadialDeviation = Callable[
+    [npt.NDArray[np.float64], npt.NDArray[np.float64]], npt.NDArray[np.float64]
+]
 
 MAP_COLUMNS = ("z_m", "angle_deg", "radial_deviation_m")
 SCAN_COLUMNS = ("z_m", "loop", "angle_deg", "distance_m")
@@ -70,8 +72,9 @@ class DeviationMap:
 
     def __call__(self, theta: npt.ArrayLike, z: npt.ArrayLike) -> npt.NDArray[np.float64]:
         """Radial deviation [m] at angles ``theta`` [rad] and part-local heights ``z`` [m]."""
-        theta, z = np.broadcast_arrays(np.asarray(theta, dtype=np.float64),
-                                       np.asarray(z, dtype=np.float64))
+        theta, z = np.broadcast_arrays(
+            np.asarray(theta, dtype=np.float64), np.asarray(z, dtype=np.float64)
+        )
         n = self.deviation.shape[1]
         a = np.mod(np.degrees(theta) * n / 360.0, n)
         i0 = np.floor(a).astype(int) % n
@@ -91,8 +94,9 @@ class DeviationMap:
         return (1 - wz) * lower + wz * upper
 
 
-def check_imperfections(imperfections: Mapping[str, RadialDeviation] | None
-                        ) -> dict[str, RadialDeviation]:
+def check_imperfections(
+    imperfections: Mapping[str, RadialDeviation] | None,
+) -> dict[str, RadialDeviation]:
     """The joint's imperfections as a dict with keys among ``"mp"``, ``"tp"``."""
     imperfections = dict(imperfections or {})
     unknown = set(imperfections) - {"mp", "tp"}
@@ -127,8 +131,11 @@ def _data_lines(path: Path) -> list[tuple[int, str]]:
     if not path.is_file():
         raise ValueError(f"{path}: no such file")
     with path.open(newline="") as f:
-        lines = [(i, line) for i, line in enumerate(f, start=1)
-                 if line.strip() and not line.lstrip().startswith("#")]
+        lines = [
+            (i, line)
+            for i, line in enumerate(f, start=1)
+            if line.strip() and not line.lstrip().startswith("#")
+        ]
     if not lines:
         raise ValueError(f"{path}: empty file (expected a header line)")
     return lines
@@ -138,16 +145,19 @@ def _split(line: str) -> list[str]:
     return [c.strip() for c in next(csv.reader([line]))]
 
 
-def _read_rows(path: Path, columns: tuple[str, ...],
-               text_columns: tuple[str, ...] = ()) -> list[tuple[int, dict[str, float | str]]]:
+def _read_rows(
+    path: Path, columns: tuple[str, ...], text_columns: tuple[str, ...] = ()
+) -> list[tuple[int, dict[str, float | str]]]:
     """Rows of a CSV file as (line number, {column: value}); numeric columns checked."""
     lines = _data_lines(path)
     header_line, header = lines[0]
     names = _split(header)
     missing = [c for c in columns if c not in names]
     if missing:
-        raise ValueError(f"{path}, line {header_line}: missing column(s) {missing}; "
-                         f"expected {list(columns)}, found {names}")
+        raise ValueError(
+            f"{path}, line {header_line}: missing column(s) {missing}; "
+            f"expected {list(columns)}, found {names}"
+        )
     index = {c: names.index(c) for c in columns}
     rows = []
     for lineno, line in lines[1:]:
@@ -179,20 +189,24 @@ def _stations(path: Path, rows: list[tuple[int, dict]]) -> list[_Station]:
     current: list[tuple[int, dict]] = []
     for lineno, row in rows:
         if current and row["z_m"] != current[0][1]["z_m"]:
-            stations.append(_Station(current[0][1]["z_m"], (current[0][0], current[-1][0]), current))
+            stations.append(
+                _Station(current[0][1]["z_m"], (current[0][0], current[-1][0]), current)
+            )
             current = []
             if row["z_m"] < stations[-1].z:
                 raise ValueError(
                     f"{path}, line {lineno}: station z_m = {row['z_m']} m comes after station "
                     f"z_m = {stations[-1].z} m; stations must be in increasing z_m "
-                    "(non-monotonic stations)")
+                    "(non-monotonic stations)"
+                )
         current.append((lineno, row))
     stations.append(_Station(current[0][1]["z_m"], (current[0][0], current[-1][0]), current))
     return stations
 
 
-def _check_full_turn(path: Path, lines: tuple[int, int], what: str, angles_deg: np.ndarray,
-                     max_gap_deg: float) -> None:
+def _check_full_turn(
+    path: Path, lines: tuple[int, int], what: str, angles_deg: np.ndarray, max_gap_deg: float
+) -> None:
     """The angles (mod 360) must cover a full turn with no gap wider than ``max_gap_deg``."""
     a = np.unique(np.mod(angles_deg, 360.0))
     gaps = np.diff(np.append(a, a[0] + 360.0))
@@ -200,7 +214,8 @@ def _check_full_turn(path: Path, lines: tuple[int, int], what: str, angles_deg: 
     if a.size < 3 or gaps[k] > max_gap_deg:
         raise ValueError(
             f"{path}, lines {lines[0]}-{lines[1]}: {what} angles do not cover a full turn: "
-            f"gap of {gaps[k]:.4g} deg after {a[k]:.4g} deg (at most {max_gap_deg} deg allowed)")
+            f"gap of {gaps[k]:.4g} deg after {a[k]:.4g} deg (at most {max_gap_deg} deg allowed)"
+        )
 
 
 def _resample(angles_deg: np.ndarray, values: np.ndarray, n: int) -> np.ndarray:
@@ -214,18 +229,24 @@ def _n_angles(angles_deg: np.ndarray) -> int:
     return max(3, int(round(360.0 / float(np.median(np.diff(a))))))
 
 
-def _check_size(path: Path, where: str, deviation: np.ndarray, part: ConePart,
-                max_thickness_fraction: float) -> None:
+def _check_size(
+    path: Path, where: str, deviation: np.ndarray, part: ConePart, max_thickness_fraction: float
+) -> None:
     limit = max_thickness_fraction * part.thickness
     worst = float(np.max(np.abs(deviation)))
     if worst > limit:
         raise ValueError(
             f"{path}, {where}: radial deviation of {worst * 1e3:.4g} mm exceeds "
-            f"{max_thickness_fraction} x thickness = {limit * 1e3:.4g} mm")
+            f"{max_thickness_fraction} x thickness = {limit * 1e3:.4g} mm"
+        )
 
 
-def read_deviation_map(path: str | Path, part: ConePart, max_thickness_fraction: float = 0.5,
-                       max_angle_gap_deg: float = 10.0) -> DeviationMap:
+def read_deviation_map(
+    path: str | Path,
+    part: ConePart,
+    max_thickness_fraction: float = 0.5,
+    max_angle_gap_deg: float = 10.0,
+) -> DeviationMap:
     """Read a processed deviation map CSV (``z_m, angle_deg, radial_deviation_m``).
 
     Deviations larger than ``max_thickness_fraction * part.thickness`` and stations
@@ -234,19 +255,30 @@ def read_deviation_map(path: str | Path, part: ConePart, max_thickness_fraction:
     path = Path(path)
     rows = _read_rows(path, MAP_COLUMNS)
     for lineno, row in rows:
-        _check_size(path, f"line {lineno}", np.array([row["radial_deviation_m"]]), part,
-                    max_thickness_fraction)
+        _check_size(
+            path,
+            f"line {lineno}",
+            np.array([row["radial_deviation_m"]]),
+            part,
+            max_thickness_fraction,
+        )
     stations = _stations(path, rows)
     angles = [np.array([r["angle_deg"] for _, r in s.rows]) for s in stations]
     for s, a in zip(stations, angles):
         _check_full_turn(path, s.lines, f"station z_m = {s.z} m:", a, max_angle_gap_deg)
     n = max(_n_angles(a) for a in angles)
-    dev = np.array([_resample(a, np.array([r["radial_deviation_m"] for _, r in s.rows]), n)
-                    for s, a in zip(stations, angles)])
+    dev = np.array(
+        [
+            _resample(a, np.array([r["radial_deviation_m"] for _, r in s.rows]), n)
+            for s, a in zip(stations, angles)
+        ]
+    )
     return DeviationMap(np.array([s.z for s in stations]), dev)
 
 
-def circular_shift(reference: np.ndarray, signal: np.ndarray, max_shift_deg: float = 180.0) -> float:
+def circular_shift(
+    reference: np.ndarray, signal: np.ndarray, max_shift_deg: float = 180.0
+) -> float:
     """Shift s [deg] minimising sum (reference(phi) - signal(phi + s))^2 over a uniform turn.
 
     Circular cross-correlation (FFT) at whole grid steps within ``|s| <= max_shift_deg``,
@@ -272,9 +304,13 @@ def _shifted(values: np.ndarray, shift_deg: float) -> np.ndarray:
     return np.interp(grid + shift_deg, grid, values, period=360.0)
 
 
-def process_ring_scans(path: str | Path, part: ConePart, max_thickness_fraction: float = 0.5,
-                       max_angle_gap_deg: float = 10.0,
-                       max_loop_shift_deg: float = 20.0) -> DeviationMap:
+def process_ring_scans(
+    path: str | Path,
+    part: ConePart,
+    max_thickness_fraction: float = 0.5,
+    max_angle_gap_deg: float = 10.0,
+    max_loop_shift_deg: float = 20.0,
+) -> DeviationMap:
     """Process raw laser ring scans (``z_m, loop, angle_deg, distance_m``) into a map.
 
     The four steps of SPEC 6 (module docstring). ``max_loop_shift_deg`` bounds the
@@ -284,28 +320,35 @@ def process_ring_scans(path: str | Path, part: ConePart, max_thickness_fraction:
     rows = _read_rows(path, SCAN_COLUMNS, text_columns=("loop",))
     for lineno, row in rows:
         if row["loop"] not in ("forward", "backward"):
-            raise ValueError(f"{path}, line {lineno}: loop = {row['loop']!r}, "
-                             "expected 'forward' or 'backward'")
+            raise ValueError(
+                f"{path}, line {lineno}: loop = {row['loop']!r}, expected 'forward' or 'backward'"
+            )
     stations = _stations(path, rows)
     profiles = []
     for s in stations:
         loops = {}
         for name in ("forward", "backward"):
-            data = np.array([(r["angle_deg"], r["distance_m"]) for _, r in s.rows if r["loop"] == name])
+            data = np.array(
+                [(r["angle_deg"], r["distance_m"]) for _, r in s.rows if r["loop"] == name]
+            )
             if data.size == 0:
-                raise ValueError(f"{path}, lines {s.lines[0]}-{s.lines[1]}: station z_m = {s.z} m "
-                                 f"has no {name} loop")
+                raise ValueError(
+                    f"{path}, lines {s.lines[0]}-{s.lines[1]}: station z_m = {s.z} m "
+                    f"has no {name} loop"
+                )
             data = data[(data[:, 0] >= 0.0) & (data[:, 0] < 360.0)]  # drop the turn-around
-            _check_full_turn(path, s.lines, f"station z_m = {s.z} m, {name} loop", data[:, 0],
-                             max_angle_gap_deg)
+            _check_full_turn(
+                path, s.lines, f"station z_m = {s.z} m, {name} loop", data[:, 0], max_angle_gap_deg
+            )
             loops[name] = data
         n = _n_angles(loops["forward"][:, 0])
         forward, backward = (_resample(d[:, 0], d[:, 1], n) for d in loops.values())
         lag = circular_shift(forward, backward, max_loop_shift_deg)  # (1)
         profiles.append(0.5 * (forward + _shifted(backward, lag)))  # (2)
     n = max(p.size for p in profiles)
-    profiles = [p if p.size == n else _resample(np.arange(p.size) * 360.0 / p.size, p, n)
-                for p in profiles]
+    profiles = [
+        p if p.size == n else _resample(np.arange(p.size) * 360.0 / p.size, p, n) for p in profiles
+    ]
     aligned = [profiles[0]]
     for p in profiles[1:]:  # (3) rotate onto the previous station
         ref = aligned[-1] - aligned[-1].mean()
@@ -313,8 +356,13 @@ def process_ring_scans(path: str | Path, part: ConePart, max_thickness_fraction:
     z = np.array([s.z for s in stations])
     deviation = np.array(aligned) - part.inner_radius(z)[:, None]
     for s, d in zip(stations, deviation):
-        _check_size(path, f"lines {s.lines[0]}-{s.lines[1]} (station z_m = {s.z} m)", d, part,
-                    max_thickness_fraction)
+        _check_size(
+            path,
+            f"lines {s.lines[0]}-{s.lines[1]} (station z_m = {s.z} m)",
+            d,
+            part,
+            max_thickness_fraction,
+        )
     return DeviationMap(z, deviation)  # (4) interpolation: DeviationMap.__call__
 
 
@@ -325,4 +373,3 @@ def read_imperfection(path: str | Path, part: ConePart, **limits: float) -> Devi
     if "loop" in _split(_data_lines(path)[0][1]):
         return process_ring_scans(path, part, **limits)
     return read_deviation_map(path, part, **limits)
-

@@ -39,6 +39,7 @@ __all__ = [
     "write_paraview",
 ]
 
+
 @dataclass(frozen=True)
 class _PartEntities:
     """gmsh entity tags of one revolved part, by role."""
@@ -80,12 +81,22 @@ def _add_part(part: ConePart, z0: float, options: MeshOptions) -> _PartEntities:
     entities = _PartEntities([], [], [], [], [], [], [])
     sources = [(2, s) for s in profile]
     for _ in range(4):
-        out = geo.revolve(sources, 0, 0, 0, 0, 0, 1, math.pi / 2,
-                          numElements=[options.n_circumferential // 4], recombine=True)
+        out = geo.revolve(
+            sources,
+            0,
+            0,
+            0,
+            0,
+            0,
+            1,
+            math.pi / 2,
+            numElements=[options.n_circumferential // 4],
+            recombine=True,
+        )
         # per source surface: [end surface, volume, laterals of radial_k, outer, radial_k+1, inner]
         sources = []
         for k in range(len(profile)):
-            end, vol, lat_bottom, lat_outer, lat_top, lat_inner = out[6 * k: 6 * k + 6]
+            end, vol, lat_bottom, lat_outer, lat_top, lat_inner = out[6 * k : 6 * k + 6]
             sources.append(end)
             entities.volumes.append(vol[1])
             entities.outer.append(lat_outer[1])
@@ -219,11 +230,14 @@ def create_joint_mesh(
     """DOLFINx mesh of MP and TP with cell and facet tags; the TP's lower end is at
     :func:`geometry.contact_map.tp_placement` (``joint.tp_offset`` for perfect parts)."""
     tp_z = tp_placement(joint, imperfections)  # on every rank: errors before gmsh starts
-    return _to_dolfinx(comm, lambda: build_joint_model(joint, options, imperfections, tp_z),
-                       "slipjoint")
+    return _to_dolfinx(
+        comm, lambda: build_joint_model(joint, options, imperfections, tp_z), "slipjoint"
+    )
 
 
-def create_tube_mesh(comm: MPI.Comm, part: ConePart, options: MeshOptions) -> dolfinx.io.gmsh.MeshData:
+def create_tube_mesh(
+    comm: MPI.Comm, part: ConePart, options: MeshOptions
+) -> dolfinx.io.gmsh.MeshData:
     """DOLFINx mesh of one part alone (lower end at z = 0), tags as in :mod:`geometry.tags`."""
     return _to_dolfinx(comm, lambda: build_tube_model(part, options), "tube")
 

@@ -59,7 +59,9 @@ class ConePart:
         if not self.straight_length >= 0:
             raise ValueError(f"straight_length must be >= 0, got {self.straight_length} m")
         if self.straight_part not in ("below", "above"):
-            raise ValueError(f"straight_part must be 'below' or 'above', got {self.straight_part!r}")
+            raise ValueError(
+                f"straight_part must be 'below' or 'above', got {self.straight_part!r}"
+            )
         if not self.thickness < self.cone_top_outer_radius:
             raise ValueError(
                 f"thickness {self.thickness} m must be smaller than the cone-top outer radius "
@@ -67,13 +69,17 @@ class ConePart:
             )
         if self.top_outer_diameter is not None:
             derived = 2.0 * self.cone_top_outer_radius
-            if abs(self.top_outer_diameter - derived) > TOP_DIAMETER_RTOL * self.bottom_outer_diameter:
+            if (
+                abs(self.top_outer_diameter - derived)
+                > TOP_DIAMETER_RTOL * self.bottom_outer_diameter
+            ):
                 implied = self.implied_half_angle_deg(self.top_outer_diameter)
                 raise ValueError(
                     f"top_outer_diameter {self.top_outer_diameter} m is inconsistent with "
-                    f"half_angle_deg {self.half_angle_deg} deg over cone_length {self.cone_length} m "
-                    f"from bottom_outer_diameter {self.bottom_outer_diameter} m, which give "
-                    f"{derived:.4f} m; the given diameters imply a half-angle of {implied:.2f} deg. "
+                    f"half_angle_deg {self.half_angle_deg} deg over cone_length "
+                    f"{self.cone_length} m from bottom_outer_diameter "
+                    f"{self.bottom_outer_diameter} m, which give {derived:.4f} m; the given "
+                    f"diameters imply a half-angle of {implied:.2f} deg. "
                     "Angles, bottom diameters, lengths and thickness are primary: drop "
                     "top_outer_diameter or make it consistent."
                 )
@@ -138,8 +144,11 @@ class ConePart:
         """Part-local heights where the profile changes (ends and junction) [m]."""
         if self.straight_length == 0.0:
             return (0.0, self.cone_length)
-        return (0.0, self.cone_bottom_z if self.straight_part == "below" else self.cone_top_z,
-                self.total_length)
+        return (
+            0.0,
+            self.cone_bottom_z if self.straight_part == "below" else self.cone_top_z,
+            self.total_length,
+        )
 
     @property
     def volume(self) -> float:
@@ -188,21 +197,26 @@ class JointGeometry:
 
     def __post_init__(self) -> None:
         if self.mp.straight_part != "below":
-            raise ValueError("the MP's straight part must be below its cone (straight_part='below')")
+            raise ValueError(
+                "the MP's straight part must be below its cone (straight_part='below')"
+            )
         if self.tp.straight_part != "above":
-            raise ValueError("the TP's straight part must be above its cone (straight_part='above')")
+            raise ValueError(
+                "the TP's straight part must be above its cone (straight_part='above')"
+            )
         if not self.tp.half_angle_deg < self.mp.half_angle_deg:
             raise ValueError(
-                f"the TP half-angle beta = {self.tp.half_angle_deg} deg must be smaller than the "
-                f"MP half-angle alpha = {self.mp.half_angle_deg} deg (first contact at the TP's lower edge)"
+                f"the TP half-angle beta = {self.tp.half_angle_deg} deg must be smaller than "
+                f"the MP half-angle alpha = {self.mp.half_angle_deg} deg (first contact at the "
+                "TP's lower edge)"
             )
         r_edge = self.tp.cone_bottom_outer_radius - self.tp.thickness
         r_lo, r_hi = self.mp.cone_top_outer_radius, self.mp.cone_bottom_outer_radius
         if not r_lo < r_edge <= r_hi:
             raise ValueError(
-                f"the TP's inner radius at its lower edge ({r_edge:.6g} m) must lie between the MP's "
-                f"outer cone radii ({r_lo:.6g} m at the top, {r_hi:.6g} m at the bottom) so that the TP "
-                "lands on the MP cone"
+                f"the TP's inner radius at its lower edge ({r_edge:.6g} m) must lie between "
+                f"the MP's outer cone radii ({r_lo:.6g} m at the top, {r_hi:.6g} m at the "
+                "bottom) so that the TP lands on the MP cone"
             )
 
     @classmethod
@@ -273,7 +287,9 @@ class MeshOptions:
     def __post_init__(self) -> None:
         n = self.n_circumferential
         if not (isinstance(n, int) and n >= 8 and n % 4 == 0):
-            raise ValueError(f"n_circumferential must be an integer multiple of 4 and >= 8, got {n!r}")
+            raise ValueError(
+                f"n_circumferential must be an integer multiple of 4 and >= 8, got {n!r}"
+            )
         if not self.axial_size > 0:
             raise ValueError(f"axial_size must be positive, got {self.axial_size} m")
         if not (isinstance(self.n_layers, int) and self.n_layers >= 1):
@@ -306,15 +322,18 @@ def geometry_from_case(case: dict[str, Any]) -> tuple[JointGeometry, Material, M
     try:
         if "geometry" not in case:
             raise ValueError("no [geometry] table")
-        return (JointGeometry.from_dict(case["geometry"]),
-                material_from_dict(case.get("material", {})),
-                MeshOptions.from_dict(case.get("mesh", {})))
+        return (
+            JointGeometry.from_dict(case["geometry"]),
+            material_from_dict(case.get("material", {})),
+            MeshOptions.from_dict(case.get("mesh", {})),
+        )
     except ValueError as e:
         raise ValueError(f"{source}: {e}") from None
 
 
-def load_geometry(path: str | Path, overrides: list[str] | None = None
-                  ) -> tuple[JointGeometry, Material, MeshOptions]:
+def load_geometry(
+    path: str | Path, overrides: list[str] | None = None
+) -> tuple[JointGeometry, Material, MeshOptions]:
     """:func:`geometry_from_case` of a TOML case file (or preset name, e.g. ``"full_scale"``)
     with optional ``section.key=value`` overrides."""
     return geometry_from_case(read_case(path, overrides))

@@ -23,7 +23,7 @@ def closed_form_fraction(joint: JointGeometry, overlap: np.ndarray) -> np.ndarra
     ta, tb = math.tan(joint.mp.half_angle), math.tan(joint.tp.half_angle)
     length, r0 = joint.tp.cone_length, float(joint.tp.inner_radius(0.0))
     zeta = np.clip((overlap - joint.overlap) * ta / (ta - tb), 0.0, np.minimum(overlap, length))
-    area = lambda s: r0 * s - 0.5 * tb * s**2  # noqa: E731  (integral of r(zeta), per radian)
+    area = lambda s: r0 * s - 0.5 * tb * s**2  # integral of r(zeta) d zeta, per radian
     return area(zeta) / area(length)
 
 
@@ -41,12 +41,15 @@ def test_perfect_cones(scaled, tmp_path):
     assert plot_contact_map(cmap, tmp_path / "map").stat().st_size > 0
 
 
-@pytest.mark.parametrize(("imperfections", "shift"), [
-    ({"tp": ovality(0.5e-3)}, -1.0),  # TP narrowest at 90 deg: touches 0.5 mm / tan(a) earlier
-    ({"mp": ovality(0.5e-3)}, -1.0),  # MP widest at 0 deg: same
-    ({"mp": ovality(0.5e-3), "tp": ovality(0.5e-3, phase_deg=90.0)}, -2.0),  # both, crossed
-    ({"mp": ovality(0.5e-3), "tp": ovality(0.5e-3)}, 0.0),  # identical ovality: fits
-])
+@pytest.mark.parametrize(
+    ("imperfections", "shift"),
+    [
+        ({"tp": ovality(0.5e-3)}, -1.0),  # TP narrowest at 90 deg: touches 0.5 mm / tan(a) earlier
+        ({"mp": ovality(0.5e-3)}, -1.0),  # MP widest at 0 deg: same
+        ({"mp": ovality(0.5e-3), "tp": ovality(0.5e-3, phase_deg=90.0)}, -2.0),  # both, crossed
+        ({"mp": ovality(0.5e-3), "tp": ovality(0.5e-3)}, 0.0),  # identical ovality: fits
+    ],
+)
 def test_ovality_shifts_first_contact(scaled, imperfections, shift):
     """An m = 2 ovality of amplitude A shifts the first-contact overlap by k A / tan(alpha)."""
     cmap = rigid_contact_map(scaled, imperfections)

@@ -6,8 +6,12 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from geometry.imperfections import (DeviationMap, process_ring_scans, read_deviation_map,
-                                    read_imperfection)
+from geometry.imperfections import (
+    DeviationMap,
+    process_ring_scans,
+    read_deviation_map,
+    read_imperfection,
+)
 from geometry.parameters import ConePart, load_geometry
 
 CASES = Path(__file__).resolve().parents[1] / "cases"
@@ -22,18 +26,25 @@ def known_shape(phi_deg: np.ndarray, z: float) -> np.ndarray:
     """Radial deviation [m]: ovality growing with z, a 3-lobe term and a weld seam at 75 deg."""
     phi = np.radians(phi_deg)
     seam = (np.mod(phi_deg - 75.0 + 180.0, 360.0) - 180.0) / 6.0
-    return (0.8e-3 + 0.4e-3 * z) * np.cos(2 * (phi - math.radians(20.0))) \
-        + 0.2e-3 * np.cos(3 * phi + 0.4) + 0.4e-3 * np.exp(-0.5 * seam**2)
+    return (
+        (0.8e-3 + 0.4e-3 * z) * np.cos(2 * (phi - math.radians(20.0)))
+        + 0.2e-3 * np.cos(3 * phi + 0.4)
+        + 0.4e-3 * np.exp(-0.5 * seam**2)
+    )
 
 
-def write_scans(path: Path, tp: ConePart, stations: np.ndarray, lag_deg: float,
-                offsets_deg: np.ndarray) -> None:
+def write_scans(
+    path: Path, tp: ConePart, stations: np.ndarray, lag_deg: float, offsets_deg: np.ndarray
+) -> None:
     """Raw scans of ``known_shape``: arm 0 deg at true angle ``offset``; the backward loop
     lags by ``lag_deg``; the sensor dwells at the turn-around (360-370 deg backward)."""
     forward = np.arange(0.0, 371.0)
     lines = ["z_m,loop,angle_deg,distance_m"]
     for z, offset in zip(stations, offsets_deg):
-        radius = lambda a: float(tp.inner_radius(z)) + known_shape(a + offset, z)  # noqa: E731
+
+        def radius(a, z=z, offset=offset):
+            return float(tp.inner_radius(z)) + known_shape(a + offset, z)
+
         for a, r in zip(forward, radius(forward)):
             lines.append(f"{z:.4f},forward,{a:.1f},{r:.9f}")
         backward = forward[::-1]
@@ -99,18 +110,26 @@ def bad_map_cases() -> dict[str, tuple[list[str], str]]:
     rows = good_map_rows()
     n = 36  # rows per station; line numbers are 1-based with the header on line 1
     return {
-        "missing column": (["z_m,angle,radial_deviation_m"] + rows[1:],
-                           r"line 1: missing column\(s\) \['angle_deg'\]"),
+        "missing column": (
+            ["z_m,angle,radial_deviation_m"] + rows[1:],
+            r"line 1: missing column\(s\) \['angle_deg'\]",
+        ),
         "NaN": (rows[:5] + ["0.1,40,nan"] + rows[6:], r"line 6: radial_deviation_m is nan"),
         "not a number": (rows[:5] + ["0.1,forty,0.0"] + rows[6:], r"line 6: angle_deg = 'forty'"),
-        "half turn": (rows[:1 + n // 2] + rows[1 + n:],
-                      r"lines 2-19: station z_m = 0.1 m: angles do not cover a full turn: "
-                      r"gap of 190 deg after 170 deg"),
-        "non-monotonic": (rows[:1] + rows[1 + n:1 + 2 * n] + rows[1:1 + n] + rows[1 + 2 * n:],
-                          r"line 38: station z_m = 0.1 m comes after station z_m = 0.2 m.*"
-                          r"non-monotonic"),
-        "too large": (rows[:10] + ["0.1,90,0.0035"] + rows[11:],
-                      r"line 11: radial deviation of 3.5 mm exceeds 0.5 x thickness = 3 mm"),
+        "half turn": (
+            rows[: 1 + n // 2] + rows[1 + n :],
+            r"lines 2-19: station z_m = 0.1 m: angles do not cover a full turn: "
+            r"gap of 190 deg after 170 deg",
+        ),
+        "non-monotonic": (
+            rows[:1] + rows[1 + n : 1 + 2 * n] + rows[1 : 1 + n] + rows[1 + 2 * n :],
+            r"line 38: station z_m = 0.1 m comes after station z_m = 0.2 m.*"
+            r"non-monotonic",
+        ),
+        "too large": (
+            rows[:10] + ["0.1,90,0.0035"] + rows[11:],
+            r"line 11: radial deviation of 3.5 mm exceeds 0.5 x thickness = 3 mm",
+        ),
     }
 
 
@@ -128,27 +147,58 @@ def bad_scan_cases(tp: ConePart, tmp_path: Path) -> dict[str, tuple[list[str], s
     write_scans(path, tp, np.array([0.1, 0.12]), 2.0, np.array([0.0, 30.0]))
     rows = path.read_text().splitlines()
     per_loop = 371
-    big = [r.rsplit(",", 1)[0] + f",{float(r.rsplit(',', 1)[1]) + 4e-3:.9f}"
-           if r.startswith("0.1200,") else r for r in rows]  # station 2 radius +4 mm
+    big = [
+        r.rsplit(",", 1)[0] + f",{float(r.rsplit(',', 1)[1]) + 4e-3:.9f}"
+        if r.startswith("0.1200,")
+        else r
+        for r in rows
+    ]  # station 2 radius +4 mm
     return {
-        "missing column": (["z_m,loop,angle_deg"] + [r.rsplit(",", 1)[0] for r in rows[1:]],
-                           r"line 1: missing column\(s\) \['distance_m'\]"),
+        "missing column": (
+            ["z_m,loop,angle_deg"] + [r.rsplit(",", 1)[0] for r in rows[1:]],
+            r"line 1: missing column\(s\) \['distance_m'\]",
+        ),
         "NaN": (rows[:3] + ["0.1000,forward,2.0,nan"] + rows[4:], r"line 4: distance_m is nan"),
-        "bad loop": (rows[:3] + ["0.1000,sideways,2.0,0.3"] + rows[4:], r"line 4: loop = 'sideways'"),
-        "no backward loop": (rows[:1 + per_loop] + rows[1 + 2 * per_loop:],
-                             r"station z_m = 0.1 m has no backward loop"),
-        "half turn": ([r for r in rows if not (r.startswith("0.1200,forward")
-                                               and float(r.split(",")[2]) > 200)],
-                      r"station z_m = 0.12 m, forward loop angles do not cover a full turn"),
-        "non-monotonic": (rows[:1] + rows[1 + 2 * per_loop:] + rows[1:1 + 2 * per_loop],
-                          r"line 744: station z_m = 0.1 m comes after station z_m = 0.12 m"),
-        "too large": (big, r"lines 744-1485 \(station z_m = 0.12 m\): radial deviation of "
-                           r"[0-9.]+ mm exceeds 0.5 x thickness"),
+        "bad loop": (
+            rows[:3] + ["0.1000,sideways,2.0,0.3"] + rows[4:],
+            r"line 4: loop = 'sideways'",
+        ),
+        "no backward loop": (
+            rows[: 1 + per_loop] + rows[1 + 2 * per_loop :],
+            r"station z_m = 0.1 m has no backward loop",
+        ),
+        "half turn": (
+            [
+                r
+                for r in rows
+                if not (r.startswith("0.1200,forward") and float(r.split(",")[2]) > 200)
+            ],
+            r"station z_m = 0.12 m, forward loop angles do not cover a full turn",
+        ),
+        "non-monotonic": (
+            rows[:1] + rows[1 + 2 * per_loop :] + rows[1 : 1 + 2 * per_loop],
+            r"line 744: station z_m = 0.1 m comes after station z_m = 0.12 m",
+        ),
+        "too large": (
+            big,
+            r"lines 744-1485 \(station z_m = 0.12 m\): radial deviation of "
+            r"[0-9.]+ mm exceeds 0.5 x thickness",
+        ),
     }
 
 
-@pytest.mark.parametrize("case", ["missing column", "NaN", "bad loop", "no backward loop",
-                                  "half turn", "non-monotonic", "too large"])
+@pytest.mark.parametrize(
+    "case",
+    [
+        "missing column",
+        "NaN",
+        "bad loop",
+        "no backward loop",
+        "half turn",
+        "non-monotonic",
+        "too large",
+    ],
+)
 def test_bad_scan_files(tp, tmp_path, case):
     rows, message = bad_scan_cases(tp, tmp_path)[case]
     path = _write(tmp_path, rows)
@@ -174,6 +224,7 @@ def test_read_imperfection_tells_formats_apart(tp, tmp_path):
     write_scans(scans, tp, np.array([0.2, 0.22]), 1.0, np.array([0.0, 10.0]))
     processed = tmp_path / "map.csv"
     processed.write_text("\n".join(good_map_rows()) + "\n")
-    assert np.allclose(read_imperfection(scans, tp).deviation,
-                       process_ring_scans(scans, tp).deviation)
+    assert np.allclose(
+        read_imperfection(scans, tp).deviation, process_ring_scans(scans, tp).deviation
+    )
     assert np.allclose(read_imperfection(processed, tp).deviation, 1e-4)

@@ -4,7 +4,6 @@ Runs serially and under ``mpiexec -n 2`` (all quantities are reduced over ranks)
 """
 
 import math
-from dataclasses import replace
 from pathlib import Path
 
 import numpy as np
@@ -74,12 +73,18 @@ def test_volumes_areas_and_tags(scaled, n_circ, axial_size, n_layers):
     assert md.mesh.geometry.cmaps[0].degree == 2
     for tag, part in ((tags.MP_VOLUME, scaled.mp), (tags.TP_VOLUME, scaled.tp)):
         assert integrate(md, "dx", tag) == pytest.approx(part.volume, rel=5e-3)
-    assert integrate(md, "ds", tags.MP_CONTACT) == pytest.approx(scaled.mp.outer_cone_area, rel=5e-3)
-    assert integrate(md, "ds", tags.TP_CONTACT) == pytest.approx(scaled.tp.inner_cone_area, rel=5e-3)
+    assert integrate(md, "ds", tags.MP_CONTACT) == pytest.approx(
+        scaled.mp.outer_cone_area, rel=5e-3
+    )
+    assert integrate(md, "ds", tags.TP_CONTACT) == pytest.approx(
+        scaled.tp.inner_cone_area, rel=5e-3
+    )
     expected = structured_counts(scaled, options)
     for tag, count in expected.items():
-        assert owned_count(md, 3 if tag in (tags.MP_VOLUME, tags.TP_VOLUME) else 2, tag) == count > 0
-    # conforming closed walls: exterior facets are only the two annuli and two lateral walls per part
+        assert (
+            owned_count(md, 3 if tag in (tags.MP_VOLUME, tags.TP_VOLUME) else 2, tag) == count > 0
+        )
+    # conforming closed walls: the only exterior facets are two annuli and two walls per part
     md.mesh.topology.create_connectivity(2, 3)
     exterior = dolfinx.mesh.exterior_facet_indices(md.mesh.topology)
     n_ext = COMM.allreduce(int(np.sum(exterior < md.mesh.topology.index_map(2).size_local)))
@@ -92,7 +97,9 @@ def test_curved_geometry_is_not_faceted(scaled):
     order 2 places the mid-edge nodes on the circles, error below 1e-5."""
     ratios = []
     for order in (1, 2):
-        md = create_joint_mesh(COMM, scaled, MeshOptions(n_circumferential=24, geometry_order=order))
+        md = create_joint_mesh(
+            COMM, scaled, MeshOptions(n_circumferential=24, geometry_order=order)
+        )
         ratios.append(integrate(md, "ds", tags.MP_CONTACT) / scaled.mp.outer_cone_area)
     mp, n = scaled.mp, 24
     r1, r2 = mp.cone_bottom_outer_radius, mp.cone_top_outer_radius
@@ -112,7 +119,9 @@ def surface_nodes(md, tag: int) -> np.ndarray:
     return np.unique(np.round(np.concatenate(COMM.allgather(x)), 12), axis=0)
 
 
-def rigid_contact_on_mesh(md, n_circumferential: int) -> tuple[float, float, np.ndarray, np.ndarray]:
+def rigid_contact_on_mesh(
+    md, n_circumferential: int
+) -> tuple[float, float, np.ndarray, np.ndarray]:
     """Lower the meshed TP rigidly until a TP contact node touches the meshed MP surface.
 
     The MP surface along each generator is interpolated linearly in z between its nodes
@@ -122,7 +131,9 @@ def rigid_contact_on_mesh(md, n_circumferential: int) -> tuple[float, float, np.
     n_angles = 2 * n_circumferential  # vertices and mid-edge nodes (order 2)
 
     def angle_index(x):
-        return np.round(np.arctan2(x[:, 1], x[:, 0]) * n_angles / (2 * np.pi)).astype(int) % n_angles
+        return (
+            np.round(np.arctan2(x[:, 1], x[:, 0]) * n_angles / (2 * np.pi)).astype(int) % n_angles
+        )
 
     mp_key, tp_key = angle_index(mp), angle_index(tp)
     assert set(tp_key) == set(mp_key) == set(range(n_angles))
@@ -165,12 +176,15 @@ def test_tp_ovality_on_mesh(scaled):
     kept) raises the first contact by A / tan(alpha) (closed form) within 1 %."""
     amplitude = 0.5e-3
     imperfections = {"tp": ovality(amplitude)}
-    md = create_joint_mesh(COMM, scaled, MeshOptions(n_circumferential=24, axial_size=0.04),
-                           imperfections)
+    md = create_joint_mesh(
+        COMM, scaled, MeshOptions(n_circumferential=24, axial_size=0.04), imperfections
+    )
     # every TP node moved radially by A cos(2 theta); MP nodes untouched
     tp_z = tp_placement(scaled, imperfections)
-    for tag, part, z0, amp in ((tags.TP_VOLUME, scaled.tp, tp_z, amplitude),
-                               (tags.MP_VOLUME, scaled.mp, 0.0, 0.0)):
+    for tag, part, z0, amp in (
+        (tags.TP_VOLUME, scaled.tp, tp_z, amplitude),
+        (tags.MP_VOLUME, scaled.mp, 0.0, 0.0),
+    ):
         nodes = np.unique(dolfinx.mesh.entities_to_geometry(md.mesh, 3, md.cell_tags.find(tag)))
         x = md.mesh.geometry.x[nodes]
         r, theta = np.hypot(x[:, 0], x[:, 1]), np.arctan2(x[:, 1], x[:, 0])

@@ -21,11 +21,13 @@ def scaled() -> JointGeometry:
 def test_volume_and_areas_against_quadrature(scaled, name):
     """Closed-form volume and cone areas equal numerical integration of the profile."""
     part: ConePart = getattr(scaled, name)
-    ro = lambda z: float(part.outer_radius(z))  # noqa: E731
-    ri = lambda z: float(part.inner_radius(z))  # noqa: E731
+    ro = lambda z: float(part.outer_radius(z))
+    ri = lambda z: float(part.inner_radius(z))
     pts = part.profile_heights()
-    volume = sum(quad(lambda z: math.pi * (ro(z) ** 2 - ri(z) ** 2), a, b)[0]
-                 for a, b in zip(pts[:-1], pts[1:]))
+    volume = sum(
+        quad(lambda z: math.pi * (ro(z) ** 2 - ri(z) ** 2), a, b)[0]
+        for a, b in zip(pts[:-1], pts[1:])
+    )
     slant = 1.0 / math.cos(part.half_angle)
     a, b = part.cone_bottom_z, part.cone_top_z
     outer = quad(lambda z: 2 * math.pi * ro(z) * slant, a, b)[0]
@@ -83,15 +85,24 @@ def test_consistent_top_diameter_accepted():
 def test_case_file_errors(tmp_path):
     base = (CASES / "scaled.toml").read_text()
     cases = {
-        "typo": (base.replace("thickness = 0.006            #", "thicknes = 0.006 #"),
-                 r"geometry\.mp\] has unknown key\(s\) \['thicknes'\]"),
-        "tabulated": (base.replace("cone_length = 1.0            #",
-                                   "top_outer_diameter = 0.584\ncone_length = 1.0 #"),
-                      r"geometry\.mp\].*0\.46 deg"),
-        "steeper MP": (base.replace("= 1.05        # alpha", "= 0.9 # alpha"),
-                       "must be smaller than the MP half-angle"),
-        "bad mesh": (base.replace("n_circumferential = 48", "n_circumferential = 30"),
-                     r"\[mesh\] n_circumferential must be an integer multiple of 4"),
+        "typo": (
+            base.replace("thickness = 0.006            #", "thicknes = 0.006 #"),
+            r"geometry\.mp\] has unknown key\(s\) \['thicknes'\]",
+        ),
+        "tabulated": (
+            base.replace(
+                "cone_length = 1.0            #", "top_outer_diameter = 0.584\ncone_length = 1.0 #"
+            ),
+            r"geometry\.mp\].*0\.46 deg",
+        ),
+        "steeper MP": (
+            base.replace("= 1.05        # alpha", "= 0.9 # alpha"),
+            "must be smaller than the MP half-angle",
+        ),
+        "bad mesh": (
+            base.replace("n_circumferential = 48", "n_circumferential = 30"),
+            r"\[mesh\] n_circumferential must be an integer multiple of 4",
+        ),
         "bad material": (base.replace("nu = 0.3", "nu = 0.7"), r"\[material\] Poisson"),
     }
     for name, (text, message) in cases.items():
@@ -112,8 +123,9 @@ def test_ignores_other_sections(tmp_path):
 
 
 def test_preset_name_and_overrides():
-    joint, _, options = load_geometry("full_scale", ["mesh.n_circumferential=24",
-                                                     "geometry.tp.straight_length=1.0"])
+    joint, _, options = load_geometry(
+        "full_scale", ["mesh.n_circumferential=24", "geometry.tp.straight_length=1.0"]
+    )
     assert options.n_circumferential == 24
     assert joint.tp.straight_length == 1.0
     with pytest.raises(ValueError, match=r"full_scale\.toml: \[mesh\] n_circumferential"):
