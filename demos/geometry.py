@@ -148,7 +148,7 @@ def main(argv: list[str] | None = None) -> int:
         )
         first, perfect = cmap.first_contact_overlap * 1e3, joint.overlap * 1e3
         print(
-            f"rigid contact map: first contact at overlap {first:.2f} mm (perfect: {perfect:.2f} mm)"
+            f"rigid contact map: first contact at overlap {first:.2f} mm (perfect {perfect:.2f} mm)"
         )
         for target in (0.25, 0.5, 0.9):
             reached = cmap.overlaps[cmap.contact_fraction >= target]
