@@ -231,3 +231,17 @@ def test_paraview_export(scaled, tmp_path_factory):
 def test_bad_imperfection_key(scaled):
     with pytest.raises(ValueError, match="imperfections keys"):
         create_joint_mesh(COMM, scaled, MeshOptions(), imperfections={"TP": lambda t, z: 0 * t})
+
+
+def test_full_scale_mesh():
+    """The 6 m joint meshes too: volumes, contact areas and placement (coarse mesh)."""
+    joint = load_geometry(CASES / "full_scale.toml")[0]
+    options = MeshOptions(n_circumferential=24, axial_size=1.5)
+    md = create_joint_mesh(COMM, joint, options)
+    for tag, part in ((tags.MP_VOLUME, joint.mp), (tags.TP_VOLUME, joint.tp)):
+        assert integrate(md, "dx", tag) == pytest.approx(part.volume, rel=5e-3)
+    assert integrate(md, "ds", tags.TP_CONTACT) == pytest.approx(joint.tp.inner_cone_area, rel=5e-3)
+    z_tp = surface_nodes(md, tags.TP_CONTACT)[:, 2].min()  # gathered over ranks
+    assert z_tp == pytest.approx(joint.first_contact_height, abs=1e-9)
+    for tag, count in structured_counts(joint, options).items():
+        assert owned_count(md, 3 if tag in (tags.MP_VOLUME, tags.TP_VOLUME) else 2, tag) == count
