@@ -1,0 +1,373 @@
+"""Nitsche frictional contact between two deformable bodies of one mesh (docs/contact.md).
+
+Slave points x (quadrature points of the slave facets, deformed) are paired with their
+closest points y on the deformed master surface (solver/pairing.py). With n = -n_m
+(n_m: master outward normal at y; n approximates the slave outward normal):
+
+    gap             g   = (x - y) . n_m                               [m]
+    slip increment  ds  = (I - n n)[(u_s - u_s_old)(x) - (u_m - u_m_old)(y)]   [m]
+    slip velocity   v   = ds / dt                                     [m/s]
+    slave traction  sigma_n = n . sigma(u_s) n, sigma_t = (I - n n) sigma(u_s) n   [Pa]
+    Nitsche         P_n = sigma_n + gamma g,  P_t = sigma_t - gamma ds,  gamma = gamma0 E / h  [Pa]
+    multipliers     lambda_n = min(P_n, 0), pressure p = -lambda_n >= 0,
+                    lambda_t = proj onto the disk of radius mu(|v|) p of P_t   [Pa]
+
+Residual (added to the bulk a(u, v) - L(v)), theta in {1, 0, -1}:
+
+    r(v) = sum_q w_q [ -theta/gamma (sigma_n(u) sigma_n(v) + sigma_t(u) . sigma_t(v))
+                       + 1/gamma lambda_n (theta sigma_n(v) + gamma dg(v))
+                       + 1/gamma lambda_t . (theta sigma_t(v) - gamma ds(v)) ]
+
+with dg(v) = (v_s - v_m(y)) . n_m and ds(v) = (I - n n)(v_s - v_m(y)). The Jacobian is
+the generalized (semismooth) Newton derivative of r, including d mu / d|v|; the variations
+of the normal n_m and of the projection y with u (curvature/geometric terms of order
+lambda x rotation) are dropped.
+"""
+
+from dataclasses import dataclass
+from enum import IntEnum
+
+from mpi4py import MPI
+from petsc4py import PETSc
+
+import numpy as np
+import numpy.typing as npt
+import scipy.sparse
+
+import dolfinx
+import dolfinx.fem.petsc
+
+from solver.elasticity import Material
+from solver.friction import FrictionLaw
+from solver.pairing import MasterSurface, SlaveQuadrature, pair
+
+__all__ = ["ContactState", "NitscheContact", "Status"]
+
+
+class Status(IntEnum):
+    """Contact status of a slave quadrature point."""
+
+    OPEN = 0
+    STICK = 1
+    SLIP = 2
+
+
+@dataclass
+class ContactState:
+    """Per slave quadrature point (this rank's points) state after the last update [SI units]."""
+
+    status: npt.NDArray  #: Status values (OPEN also for points without a master partner)
+    gap: npt.NDArray  #: normal gap g [m] (nan where unpaired)
+    pressure: npt.NDArray  #: contact pressure p = -lambda_n >= 0 [Pa]
+    tangential_traction: npt.NDArray  #: friction traction lambda_t on the slave (np, 3) [Pa]
+    slip_velocity: npt.NDArray  #: ds / dt (np, 3) [m/s] (zero in quasi-static steps without dt)
+    coordinates: npt.NDArray  #: deformed slave points x (np, 3) [m]
+    weights: npt.NDArray  #: surface quadrature weights (reference configuration) [m^2]
+    normal: npt.NDArray  #: n = -n_m, the contact normal pointing out of the slave (np, 3)
+
+
+class NitscheContact:
+    """Nitsche frictional contact of a slave surface against a master surface of the same mesh.
+
+    Args:
+        V: blocked vector Lagrange space of the displacement [m].
+        facet_tags: facet tags holding both contact surfaces.
+        slave_tag, master_tag: tags of the slave and master surfaces.
+        material: elastic material of the slave body (its stress enters the Nitsche terms).
+        friction: Coulomb law mu(|v|).
+        gamma0: dimensionless Nitsche parameter; gamma = gamma0 E / h with h the slave cell
+            height normal to the facet (cell volume / facet area) [m].
+        theta: 1 symmetric, 0 non-symmetric (incomplete), -1 skew-symmetric variant.
+        quadrature_degree: degree of the slave facet quadrature (default 2 p + 1 for degree p).
+        chunk: points processed at once in the Jacobian (bounds memory).
+
+    Call ``set_reference(u_old, dt)`` at the start of each step and ``update(u)`` at each
+    iterate, then ``residual()`` / ``jacobian()``. Both are in the layout of
+    ``dolfinx.fem.petsc`` vectors/matrices of V (global indices, owned rows). The
+    Jacobian is a separate AIJ matrix with its own sparsity (it couples slave and
+    master dofs, which the bulk pattern lacks): add it as ``A.axpy(1, J,
+    PETSc.Mat.Structure.DIFFERENT_NONZERO_PATTERN)`` or use ``solver.nonlinear``, which
+    keeps A and J apart.
+    """
+
+    def __init__(
+        self,
+        V: dolfinx.fem.FunctionSpace,
+        facet_tags: dolfinx.mesh.MeshTags,
+        slave_tag: int,
+        master_tag: int,
+        material: Material,
+        friction: FrictionLaw,
+        gamma0: float = 100.0,
+        theta: int = 1,
+        quadrature_degree: int | None = None,
+        chunk: int = 2000,
+    ):
+        if theta not in (1, 0, -1):
+            raise ValueError(f"theta must be 1 (symmetric), 0 (non-symmetric) or -1 (skew), got {theta}")
+        if not gamma0 > 0:
+            raise ValueError(f"Nitsche parameter gamma0 must be positive, got {gamma0}")
+        if slave_tag == master_tag:
+            raise ValueError(f"slave and master tags must differ, got {slave_tag} for both")
+        degree = V.element.basix_element.degree
+        qdeg = 2 * degree + 1 if quadrature_degree is None else quadrature_degree
+        if qdeg < 1:
+            raise ValueError(f"quadrature_degree must be >= 1, got {qdeg}")
+        self.V = V
+        self.material = material
+        self.friction = friction
+        self.theta = theta
+        self.gamma0 = gamma0
+        self.chunk = chunk
+        self.slave = SlaveQuadrature(V, facet_tags, slave_tag, qdeg)
+        self.master = MasterSurface(V, facet_tags, master_tag)
+        self.gamma = gamma0 * material.E / self.slave.h  #: Nitsche parameter per point [Pa/m]
+        imap = V.dofmap.index_map
+        self._slave_blocks = imap.local_to_global(self.slave.dofs.ravel()).reshape(self.slave.dofs.shape)
+        self._sizes = (imap.size_local * 3, imap.size_global * 3)
+        u0 = dolfinx.fem.Function(V)
+        self.dt: float | None = None
+        self.set_reference(u0, None)
+        self.update(u0)
+
+    # -- state ---------------------------------------------------------------------------
+    def set_reference(self, u_old: dolfinx.fem.Function, dt: float | None) -> None:
+        """Start a step: slip increments are measured from u_old; slip velocity = increment / dt [s].
+
+        ``dt=None`` marks a quasi-static step without a rate: the slip speed is taken as 0
+        (static coefficient mu_s).
+        """
+        if dt is not None and not dt > 0:
+            raise ValueError(f"time step dt must be positive (or None for rate-free steps), got {dt}")
+        self.dt = dt
+        self._u_old_slave = self.slave.displacement(u_old)
+        self._u_old_master = self.master.displacement(u_old)
+
+    def update(self, u: dolfinx.fem.Function) -> None:
+        """Pair the slave points with the deformed master surface and evaluate the contact state at u."""
+        u.x.scatter_forward()
+        slave, gdim = self.slave, self.slave.gdim
+        self._u_slave_nodes = u.x.array.reshape(-1, gdim)[slave.dofs]
+        u_s = np.einsum("pn,pni->pi", slave.values, self._u_slave_nodes)
+        disp = self.master.displacement(u)
+        self._disp = disp
+        x = slave.points + u_s
+        previous = self.pairing.facet if hasattr(self, "pairing") else None
+        self.pairing = p = pair(x, self.master, disp, previous=previous)
+        n = -p.normal
+        grad_u = np.einsum("pni,pnj->pij", self._u_slave_nodes, slave.gradients)
+        eps = 0.5 * (grad_u + grad_u.transpose(0, 2, 1))
+        mat = self.material
+        sig = 2 * mat.mu * eps + mat.lmbda * np.trace(eps, axis1=1, axis2=2)[:, None, None] * np.eye(gdim)
+        traction = np.einsum("pij,pj->pi", sig, n)
+        sigma_n = np.einsum("pi,pi->p", traction, n)
+        sigma_t = traction - sigma_n[:, None] * n
+        facet = np.maximum(p.facet, 0)
+        old_m = np.einsum("pn,pni->pi", p.master_values, self._u_old_master[facet])
+        new_m = np.einsum("pn,pni->pi", p.master_values, disp[facet])
+        rel = (u_s - self._u_old_slave) - (new_m - old_m)
+        ds = rel - np.einsum("pi,pi->p", rel, n)[:, None] * n
+        gamma = self.gamma
+        P_n = sigma_n + gamma * p.gap
+        P_t = sigma_t - gamma[:, None] * ds
+        paired = p.paired
+        active = paired & (P_n <= 0)  # generalized derivative: the kink P_n = 0 counts as active
+        lam_n = np.where(active, P_n, 0.0)
+        pressure = -lam_n
+        speed = np.zeros(len(x)) if self.dt is None else np.linalg.norm(ds, axis=1) / self.dt
+        mu = self.friction.coefficient(speed)
+        radius = mu * pressure
+        norm_Pt = np.linalg.norm(P_t, axis=1)
+        stick = active & (norm_Pt <= radius)
+        slip = active & ~stick
+        scale = np.where(slip, radius / np.where(norm_Pt > 0, norm_Pt, 1.0), 1.0)
+        lam_t = np.where(active[:, None], P_t * scale[:, None], 0.0)
+        status = np.full(len(x), Status.OPEN, dtype=np.int8)
+        status[stick & (pressure > 0)] = Status.STICK
+        status[slip] = Status.SLIP
+        self._lam_n, self._lam_t = lam_n, lam_t
+        self._sigma_n, self._sigma_t = sigma_n, sigma_t
+        self._P_t, self._ds, self._speed, self._mu = P_t, ds, speed, mu
+        self._active, self._stick, self._slip = active, stick, slip
+        self._n = n
+        velocity = ds / self.dt if self.dt is not None else np.zeros_like(ds)
+        self.state = ContactState(
+            status=status,
+            gap=np.where(paired, p.gap, np.nan),
+            pressure=pressure,
+            tangential_traction=lam_t,
+            slip_velocity=velocity,
+            coordinates=x,
+            weights=slave.weights,
+            normal=n,
+        )
+
+    # -- per-point operators -------------------------------------------------------------
+    def _operators(self, idx: npt.NDArray):
+        """Point operators on the local dof vector [slave cell dofs, master facet dofs] (blocked)."""
+        slave, gdim = self.slave, self.slave.gdim
+        mat = self.material
+        n = self._n[idx]
+        n_m = -n
+        g = slave.gradients[idx]  # (q, ns, 3)
+        phi = slave.values[idx]
+        psi = self.pairing.master_values[idx]
+        ns, nm = phi.shape[1], psi.shape[1]
+        eye = np.eye(gdim)
+        # traction sigma(phi_a e_c) n, shape (q, i, a, c)
+        gn = np.einsum("pai,pi->pa", g, n)
+        T = mat.mu * (np.einsum("pa,ic->piac", gn, eye) + np.einsum("pai,pc->piac", g, n))
+        T += mat.lmbda * np.einsum("pac,pi->piac", g, n)
+        T = T.reshape(len(idx), gdim, ns * gdim)
+        Sn = np.einsum("pi,pik->pk", n, T)
+        St = T - n[:, :, None] * Sn[:, None, :]
+        # jump v_s - v_m(y), shape (q, i, ndof)
+        jump = np.concatenate(
+            [np.einsum("pa,ic->piac", phi, eye).reshape(len(idx), gdim, ns * gdim),
+             -np.einsum("pb,ic->pibc", psi, eye).reshape(len(idx), gdim, nm * gdim)],
+            axis=2,
+        )
+        zeros = np.zeros((len(idx), nm * gdim))
+        Sn = np.concatenate([Sn, zeros], axis=1)
+        St = np.concatenate([St, np.zeros((len(idx), gdim, nm * gdim))], axis=2)
+        G = np.einsum("pi,pik->pk", n_m, jump)
+        D = jump - n[:, :, None] * np.einsum("pi,pik->pk", n, jump)[:, None, :]
+        return Sn, St, G, D
+
+    def _global_dofs(self, idx: npt.NDArray) -> npt.NDArray:
+        gdim = self.slave.gdim
+        blocks = np.concatenate([self._slave_blocks[idx], self.master.blocks[self.pairing.facet[idx]]], axis=1)
+        return (blocks[:, :, None] * gdim + np.arange(gdim)).reshape(len(idx), -1)
+
+    def _chunks(self):
+        paired = np.flatnonzero(self.pairing.paired)
+        for start in range(0, len(paired), self.chunk):
+            yield paired[start : start + self.chunk]
+
+    # -- assembly ------------------------------------------------------------------------
+    def residual(self) -> PETSc.Vec:
+        """Contact residual r(v) at the last update, a ghosted PETSc vector in V's layout [N]."""
+        th = self.theta
+        rows, vals = [], []
+        for idx in self._chunks():
+            Sn, St, G, D = self._operators(idx)
+            gam = self.gamma[idx]
+            w = self.slave.weights[idx]
+            lam_n, lam_t = self._lam_n[idx], self._lam_t[idx]
+            r = (th / gam * (lam_n - self._sigma_n[idx]))[:, None] * Sn + lam_n[:, None] * G
+            r += np.einsum("pik,pi->pk", th * St, (lam_t - self._sigma_t[idx]) / gam[:, None])
+            r -= np.einsum("pik,pi->pk", D, lam_t)
+            rows.append(self._global_dofs(idx).ravel())
+            vals.append((w[:, None] * r).ravel())
+        return self._assemble_vector(rows, vals)
+
+    def _assemble_vector(self, rows, vals) -> PETSc.Vec:
+        b = dolfinx.fem.petsc.create_vector(self.V)
+        with b.localForm() as loc:
+            loc.set(0.0)
+        if rows:
+            rows, vals = np.concatenate(rows), np.concatenate(vals)
+            unique, inverse = np.unique(rows, return_inverse=True)
+            b.setValues(unique.astype(PETSc.IntType), np.bincount(inverse, vals), addv=PETSc.InsertMode.ADD_VALUES)
+        b.assemblyBegin()
+        b.assemblyEnd()
+        return b
+
+    def _tangent_rows(self, idx, Sn, St, G, D, normal_tied, stick, slip, consistent: bool):
+        """d lambda_n (q, ndof) and d lambda_t (q, 3, ndof) for the given per-point states."""
+        gam = self.gamma[idx]
+        Bn = Sn + gam[:, None] * G
+        Bt = St - gam[:, None, None] * D
+        dlam_n = np.where(normal_tied[:, None], Bn, 0.0)
+        dlam_t = np.where(stick[:, None, None], Bt, 0.0)
+        if consistent and slip.any():
+            s = np.flatnonzero(slip)
+            P_t = self._P_t[idx[s]]
+            norm = np.linalg.norm(P_t, axis=1)
+            q = P_t / norm[:, None]
+            mu, p = self._mu[idx[s]], -self._lam_n[idx[s]]
+            proj = np.eye(3) - np.einsum("pi,pj->pij", q, q)
+            d = (mu * p / norm)[:, None, None] * np.einsum("pij,pjk->pik", proj, Bt[s])
+            d_radius = -mu[:, None] * Bn[s]
+            if self.dt is not None:
+                ds = self._ds[idx[s]]
+                ds_norm = np.linalg.norm(ds, axis=1)
+                e = np.divide(ds, ds_norm[:, None], out=np.zeros_like(ds), where=ds_norm[:, None] > 0)
+                dmu = self.friction.derivative(self._speed[idx[s]])
+                d_radius += (p * dmu / self.dt)[:, None] * np.einsum("pi,pik->pk", e, D[s])
+            dlam_t[s] = d + q[:, :, None] * d_radius[:, None, :]
+        return dlam_n, dlam_t
+
+    def _assemble_matrix(self, tangent) -> PETSc.Mat:
+        """Assemble sum_q w (-theta/gamma (Sn Sn + St St) + 1/gamma (A_n dlam_n + A_t^T dlam_t))."""
+        th = self.theta
+        N = self._sizes[1]
+        total = scipy.sparse.csr_matrix((N, N))
+        for idx in self._chunks():
+            Sn, St, G, D = self._operators(idx)
+            dlam_n, dlam_t = tangent(idx, Sn, St, G, D)
+            gam = self.gamma[idx]
+            w = (self.slave.weights[idx] / gam)[:, None, None]
+            An = th * Sn + gam[:, None] * G
+            At = th * St - gam[:, None, None] * D
+            K = -th * (np.einsum("pk,pl->pkl", Sn, Sn) + np.einsum("pik,pil->pkl", St, St))
+            K += np.einsum("pk,pl->pkl", An, dlam_n) + np.einsum("pik,pil->pkl", At, dlam_t)
+            dofs = self._global_dofs(idx)
+            nd = dofs.shape[1]
+            r = np.repeat(dofs, nd, axis=1).ravel()
+            c = np.tile(dofs, (1, nd)).ravel()
+            total = total + scipy.sparse.csr_matrix(((w * K).ravel(), (r, c)), shape=(N, N))
+        coo = total.tocoo()
+        A = PETSc.Mat().create(comm=self.V.mesh.comm)
+        A.setSizes((self._sizes, self._sizes), bsize=3)
+        A.setType(PETSc.Mat.Type.AIJ)
+        A.setPreallocationCOO(coo.row.astype(PETSc.IntType), coo.col.astype(PETSc.IntType))
+        A.setValuesCOO(coo.data, addv=PETSc.InsertMode.INSERT_VALUES)
+        A.assemble()
+        return A
+
+    def jacobian(self) -> PETSc.Mat:
+        """Generalized-Newton Jacobian of the contact residual at the last update [N/m]."""
+        return self._assemble_matrix(
+            lambda idx, Sn, St, G, D: self._tangent_rows(
+                idx, Sn, St, G, D, self._active[idx], self._stick[idx], self._slip[idx], consistent=True
+            )
+        )
+
+    def interface_stiffness(self, status: npt.NDArray | Status) -> PETSc.Mat:
+        """Linear interface tangent for a given per-point status (this rank's slave points) [N/m].
+
+        STICK ties normal and tangential relative motion, SLIP the normal motion only, OPEN
+        nothing (for theta != 0 the Nitsche consistency term -theta/gamma sigma(u) sigma(v)
+        remains at every paired point, as in the nonlinear operator). Uses the pairing of the
+        last ``update`` (the reference configuration if none). Add to the bulk stiffness with
+        ``K.axpy(1, S, PETSc.Mat.Structure.DIFFERENT_NONZERO_PATTERN)``.
+        """
+        status = np.broadcast_to(np.asarray(status, dtype=np.int8), (self.slave.num_points,))
+        if not np.isin(status, list(Status)).all():
+            raise ValueError("status values must be Status.OPEN, Status.STICK or Status.SLIP")
+        tied = status != Status.OPEN
+        stick = status == Status.STICK
+        return self._assemble_matrix(
+            lambda idx, Sn, St, G, D: self._tangent_rows(
+                idx, Sn, St, G, D, tied[idx], stick[idx], np.zeros(len(idx), bool), consistent=False
+            )
+        )
+
+    def band_status(self, height: float, axis: int = 2) -> npt.NDArray:
+        """STICK for slave points within ``height`` [m] of the slave surface's lowest point along
+        ``axis`` (e.g. a bonded band at the TP lower edge), OPEN elsewhere (reference coordinates)."""
+        if not height >= 0:
+            raise ValueError(f"band height must be >= 0 m, got {height}")
+        z = self.slave.points[:, axis]
+        z_min = self.V.mesh.comm.allreduce(z.min() if len(z) else np.inf, op=MPI.MIN)
+        return np.where(z <= z_min + height, Status.STICK, Status.OPEN).astype(np.int8)
+
+    # -- output --------------------------------------------------------------------------
+    def forces(self) -> tuple[float, npt.NDArray]:
+        """Total normal force sum(w p) [N] and friction force sum(w lambda_t) (3,) [N] on the slave (all ranks)."""
+        w = self.slave.weights
+        comm = self.V.mesh.comm
+        normal = comm.allreduce(float(w @ self.state.pressure), op=MPI.SUM)
+        tangential = comm.allreduce(w @ self.state.tangential_traction, op=MPI.SUM)
+        return normal, tangential

@@ -1,0 +1,246 @@
+"""Generalized Newton for a linear bulk operator plus Nitsche contact: A u + r_c(u) = b.
+
+A is constant during the solve (stiffness K in quasi-static steps, the Newmark effective
+stiffness K + c_M M + c_C C in dynamics), assembled with the Dirichlet conditions
+(``assemble_matrix(a, bcs=bcs)``: identity rows/columns), and b is the load with lifting
+and boundary values applied (``apply_lifting``, ``set_bc``), as for a linear solve.
+
+Linear solves reuse one LU factorisation: each Newton correction solves
+(A + J_c(u_k)) du = -F(u_k) by GMRES (right preconditioning, true residual) with the
+LU factors of A + J_c at an earlier iterate as preconditioner. J_c only touches the
+interface dofs and changes only where contact states change, so GMRES needs few
+iterations; when it needs more than ``refactor_after`` (or fails) the current
+A + J_c is factorised. The correction is still the exact Newton step (to the Krylov
+tolerance), so the generalized Newton convergence rate is kept. The workspace (and
+its factorisation) can be kept across steps while A is unchanged.
+"""
+
+import time
+from dataclasses import dataclass, field
+
+from petsc4py import PETSc
+
+import numpy as np
+
+import dolfinx
+
+from solver.contact import NitscheContact
+
+__all__ = ["ContactNewtonSolver", "NewtonResult", "solve_contact_problem"]
+
+
+@dataclass
+class NewtonResult:
+    """Outcome of a Newton solve (residual norms in N, the l2 norm of the nodal residual)."""
+
+    converged: bool
+    iterations: int
+    residual_norms: list[float]
+    linear_iterations: list[int] = field(default_factory=list)
+    factorizations: int = 0
+    message: str = ""
+    timings: dict[str, float] = field(default_factory=dict)  #: wall time per phase [s]
+
+
+class _SumOperator:
+    """Matrix-free action of A + J (PETSc python matrix context)."""
+
+    def __init__(self, A: PETSc.Mat, J: PETSc.Mat):
+        self.A, self.J = A, J
+
+    def mult(self, mat, x, y):
+        self.A.mult(x, y)
+        self.J.multAdd(x, y, y)
+
+
+class ContactNewtonSolver:
+    """Newton solver for A u + r_c(u) = b that keeps an LU factorisation between iterations and calls.
+
+    Args:
+        A: bulk matrix (with Dirichlet rows/columns), constant while this solver is used.
+        bcs: Dirichlet conditions of the problem.
+        rtol, atol: convergence when ||F|| <= max(atol, rtol max(||F_0||, ||b||)) [N] ...
+        stol: ... or when the Newton correction ||du||_inf <= stol ||u||_inf (the residual of a
+            C0 faceted master surface can stagnate at the level lambda x kink angle).
+        max_iterations: Newton iteration limit.
+        refactor_after: refactorise when GMRES needs more iterations than this; 0 factorises
+            A + J_c at every Newton iteration (plain Newton with direct solves).
+        krylov_rtol: relative tolerance of the GMRES correction solve.
+        lu_solver: PETSc factorisation package ("mumps", "superlu_dist", "petsc").
+    """
+
+    def __init__(
+        self,
+        A: PETSc.Mat,
+        bcs: list[dolfinx.fem.DirichletBC],
+        rtol: float = 1e-9,
+        atol: float = 1e-12,
+        stol: float = 1e-10,
+        max_iterations: int = 30,
+        refactor_after: int = 25,
+        krylov_rtol: float = 1e-11,
+        lu_solver: str = "mumps",
+    ):
+        if max_iterations < 1:
+            raise ValueError(f"max_iterations must be >= 1, got {max_iterations}")
+        if refactor_after < 0:
+            raise ValueError(f"refactor_after must be >= 0, got {refactor_after}")
+        if not (rtol > 0 and atol >= 0 and stol >= 0 and krylov_rtol > 0):
+            raise ValueError("tolerances must be positive (atol, stol >= 0)")
+        self.A = A
+        self.rtol, self.atol, self.stol = rtol, atol, stol
+        self.max_iterations = max_iterations
+        self.refactor_after = refactor_after
+        rows = []
+        for bc in bcs:
+            dofs, _ = bc.dof_indices()
+            imap, bs = bc.function_space.dofmap.index_map, bc.function_space.dofmap.index_map_bs
+            owned = dofs[dofs < imap.size_local * bs]
+            rows.append(imap.local_to_global(owned // bs) * bs + owned % bs)
+        self._bc_rows = np.unique(np.concatenate(rows)).astype(PETSc.IntType) if rows else np.zeros(0, PETSc.IntType)
+        self._bc_local = np.unique(np.concatenate([bc.dof_indices()[0] for bc in bcs])) if bcs else np.zeros(0, np.int32)
+        self.bcs = bcs
+        comm = A.getComm()
+        self.ksp = PETSc.KSP().create(comm)
+        self.ksp.setType(PETSc.KSP.Type.GMRES)
+        self.ksp.setGMRESRestart(max(refactor_after, 1) + 5)
+        self.ksp.setPCSide(PETSc.PC.Side.RIGHT)
+        self.ksp.setNormType(PETSc.KSP.NormType.UNPRECONDITIONED)
+        self.ksp.setTolerances(rtol=krylov_rtol, atol=0.0, max_it=max(refactor_after, 1))
+        self.ksp.setInitialGuessNonzero(False)
+        pc = self.ksp.getPC()
+        pc.setType(PETSc.PC.Type.LU)
+        pc.setFactorSolverType(lu_solver)
+        self._P: PETSc.Mat | None = None
+        self.factorizations = 0
+
+    def _factorise(self, J: PETSc.Mat, op: PETSc.Mat) -> None:
+        if self._P is not None:
+            self._P.destroy()
+        self._P = self.A.copy()
+        self._P.axpy(1.0, J, PETSc.Mat.Structure.DIFFERENT_NONZERO_PATTERN)
+        self.ksp.setOperators(op, self._P)
+        self.ksp.getPC().setReusePreconditioner(False)
+        self.ksp.setUp()
+        self.ksp.getPC().setReusePreconditioner(True)
+        self.factorizations += 1
+
+    def _correction(self, J: PETSc.Mat, F: PETSc.Vec, du: PETSc.Vec, timings: dict) -> int:
+        """Solve (A + J) du = -F; returns GMRES iterations (refactorising when needed)."""
+        op = PETSc.Mat().createPython(self.A.getSizes(), _SumOperator(self.A, J), comm=self.A.getComm())
+        op.setUp()
+        rhs = F.copy()
+        rhs.scale(-1.0)
+        fresh = self._P is None or self.refactor_after == 0
+        t0 = time.perf_counter()
+        if fresh:
+            self._factorise(J, op)
+        else:
+            self.ksp.setOperators(op, self._P)
+        timings["factorise"] += time.perf_counter() - t0
+        t0 = time.perf_counter()
+        self.ksp.solve(rhs, du)
+        its = self.ksp.getIterationNumber()
+        if not fresh and self.ksp.getConvergedReason() <= 0:
+            t1 = time.perf_counter()
+            self._factorise(J, op)
+            timings["factorise"] += time.perf_counter() - t1
+            self.ksp.solve(rhs, du)
+            its += self.ksp.getIterationNumber()
+        timings["linear solve"] += time.perf_counter() - t0
+        reason = self.ksp.getConvergedReason()
+        op.destroy()
+        rhs.destroy()
+        if reason <= 0:
+            raise RuntimeError(f"linear solve failed (KSP reason {reason})")
+        return its
+
+    def solve(self, b: PETSc.Vec, contact: NitscheContact, u: dolfinx.fem.Function) -> NewtonResult:
+        """Solve A u + r_c(u) = b for u (initial guess: u on entry, Dirichlet values imposed)."""
+        for bc in self.bcs:
+            bc.set(u.x.array)
+        u.x.scatter_forward()
+        x = u.x.petsc_vec
+        F = x.duplicate()
+        du = x.duplicate()
+        norms, linear = [], []
+        timings = {"contact update": 0.0, "contact assembly": 0.0, "factorise": 0.0, "linear solve": 0.0}
+        b_norm = b.norm()
+        factorizations0 = self.factorizations
+        result = None
+        step_small = False
+        for k in range(self.max_iterations + 1):
+            t0 = time.perf_counter()
+            contact.update(u)
+            t1 = time.perf_counter()
+            rc = contact.residual()
+            timings["contact update"] += t1 - t0
+            with rc.localForm() as loc:
+                loc.array[self._bc_local[self._bc_local < loc.array.size]] = 0.0
+            self.A.mult(x, F)
+            F.axpy(-1.0, b)
+            F.axpy(1.0, rc)
+            rc.destroy()
+            norm = F.norm()
+            timings["contact assembly"] += time.perf_counter() - t1
+            norms.append(norm)
+            if not np.isfinite(norm):
+                result = NewtonResult(False, k, norms, linear, message=f"residual is not finite at iteration {k}")
+                break
+            if norm <= max(self.atol, self.rtol * max(norms[0], b_norm)) or step_small:
+                result = NewtonResult(True, k, norms, linear)
+                break
+            if k == self.max_iterations:
+                result = NewtonResult(False, k, norms, linear, message=f"no convergence in {k} Newton iterations (||F|| = {norm:.3e} N)")
+                break
+            t0 = time.perf_counter()
+            J = contact.jacobian()
+            J.zeroRows(self._bc_rows, diag=0.0)
+            timings["contact assembly"] += time.perf_counter() - t0
+            try:
+                linear.append(self._correction(J, F, du, timings))
+            except (PETSc.Error, RuntimeError) as err:
+                result = NewtonResult(False, k, norms, linear, message=f"linear solve failed at Newton iteration {k}: {err}")
+                J.destroy()
+                break
+            J.destroy()
+            x.axpy(1.0, du)
+            u.x.scatter_forward()
+            step_small = du.norm(PETSc.NormType.INFINITY) <= self.stol * x.norm(PETSc.NormType.INFINITY)
+        F.destroy()
+        du.destroy()
+        result.factorizations = self.factorizations - factorizations0
+        result.timings = timings
+        return result
+
+    def destroy(self) -> None:
+        self.ksp.destroy()
+        if self._P is not None:
+            self._P.destroy()
+
+
+def solve_contact_problem(
+    A: PETSc.Mat,
+    b: PETSc.Vec,
+    contact: NitscheContact,
+    u: dolfinx.fem.Function,
+    bcs: list[dolfinx.fem.DirichletBC],
+    solver: ContactNewtonSolver | None = None,
+    **options,
+) -> NewtonResult:
+    """Solve A u + r_c(u) = b by generalized Newton (see ContactNewtonSolver for ``options``).
+
+    Pass a ``solver`` created once for the same A (and bcs) to keep its factorisation
+    across load/time steps; otherwise a new one is made and destroyed. Returns a
+    NewtonResult; ``converged=False`` (with ``message``) lets the caller cut the step.
+    """
+    own = solver is None
+    if own:
+        solver = ContactNewtonSolver(A, bcs, **options)
+    elif options:
+        raise ValueError("pass options either to ContactNewtonSolver or here, not both")
+    try:
+        return solver.solve(b, contact, u)
+    finally:
+        if own:
+            solver.destroy()

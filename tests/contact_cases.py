@@ -1,0 +1,168 @@
+"""Small two-body hexahedral meshes for the contact tests (built in memory with gmsh on rank 0).
+
+Each mesh holds two disjoint bodies whose facing surfaces coincide geometrically but
+do not share nodes, with different element counts on the two sides (non-matching).
+Facet tags: ``MASTER`` and ``SLAVE`` for the contact surfaces.
+"""
+
+from mpi4py import MPI
+
+import gmsh
+import numpy as np
+
+import dolfinx
+from dolfinx.io import gmsh as gmshio
+
+MASTER, SLAVE = 13, 14
+LOWER, UPPER = 1, 2
+
+
+def _to_mesh(comm: MPI.Comm, build) -> tuple[dolfinx.mesh.Mesh, dolfinx.mesh.MeshTags, dolfinx.mesh.MeshTags]:
+    """Run ``build`` (which fills the gmsh model) on rank 0 and distribute the mesh."""
+    if comm.rank == 0:
+        gmsh.initialize(interruptible=False)
+        gmsh.option.setNumber("General.Terminal", 0)
+        gmsh.model.add("contact_case")
+        build()
+    data = gmshio.model_to_mesh(gmsh.model if comm.rank == 0 else None, comm, 0, gdim=3)
+    if comm.rank == 0:
+        gmsh.finalize()
+    return data.mesh, data.cell_tags, data.facet_tags
+
+
+def _structured_box(x0, dx, n: tuple[int, int, int]) -> tuple[int, int, int]:
+    """Hexahedral box by extrusion; returns (bottom surface, top surface, volume) tags."""
+    occ = gmsh.model.occ
+    rect = occ.addRectangle(x0[0], x0[1], x0[2], dx[0], dx[1])
+    out = occ.extrude([(2, rect)], 0, 0, dx[2], numElements=[n[2]], recombine=True)
+    occ.synchronize()
+    for _, c in gmsh.model.getBoundary([(2, rect)], oriented=False):
+        x = gmsh.model.occ.getCenterOfMass(1, c)
+        along_x = abs(x[1] - x0[1]) < 1e-12 or abs(x[1] - x0[1] - dx[1]) < 1e-12
+        gmsh.model.mesh.setTransfiniteCurve(c, (n[0] if along_x else n[1]) + 1)
+    gmsh.model.mesh.setTransfiniteSurface(rect)
+    gmsh.model.mesh.setRecombine(2, rect)
+    return rect, out[0][1], out[1][1]
+
+
+def two_blocks(
+    comm: MPI.Comm,
+    size: tuple[float, float] = (1.0, 1.0),
+    heights: tuple[float, float] = (0.5, 0.5),
+    lower: tuple[int, int, int] = (3, 3, 2),
+    upper: tuple[int, int, int] = (4, 5, 2),
+    order: int = 1,
+    inset: float = 0.0,
+):
+    """A base [0,Lx]x[0,Ly]x[-H0,0] (LOWER, top face MASTER) and a block on it (UPPER, bottom SLAVE).
+
+    The block covers [inset, Lx - inset] x [inset, Ly - inset] x [0, H1].
+    """
+
+    def build():
+        b0, t0, v0 = _structured_box((0, 0, -heights[0]), (size[0], size[1], heights[0]), lower)
+        b1, t1, v1 = _structured_box(
+            (inset, inset, 0), (size[0] - 2 * inset, size[1] - 2 * inset, heights[1]), upper
+        )
+        gmsh.model.addPhysicalGroup(3, [v0], LOWER)
+        gmsh.model.addPhysicalGroup(3, [v1], UPPER)
+        gmsh.model.addPhysicalGroup(2, [t0], MASTER)
+        gmsh.model.addPhysicalGroup(2, [b1], SLAVE)
+        gmsh.model.mesh.generate(3)
+        gmsh.model.mesh.setOrder(order)
+
+    return _to_mesh(comm, build)
+
+
+def _ring_sector(r0: float, r1: float, thickness: float, n_r: int, n_theta: int) -> tuple[int, int, int]:
+    """Quarter annulus r0 < r < r1, 0 < theta < pi/2, 0 < z < thickness; (inner, outer surface, volume)."""
+    occ = gmsh.model.occ
+    c = occ.addPoint(0, 0, 0)
+    p = [occ.addPoint(r0, 0, 0), occ.addPoint(r1, 0, 0), occ.addPoint(0, r1, 0), occ.addPoint(0, r0, 0)]
+    lines = [occ.addLine(p[0], p[1]), occ.addCircleArc(p[1], c, p[2]), occ.addLine(p[2], p[3]), occ.addCircleArc(p[3], c, p[0])]
+    surf = occ.addPlaneSurface([occ.addCurveLoop(lines)])
+    out = occ.extrude([(2, surf)], 0, 0, thickness, numElements=[1], recombine=True)
+    occ.remove([(0, c)])
+    occ.synchronize()
+    for i, line in enumerate(lines):
+        gmsh.model.mesh.setTransfiniteCurve(line, (n_r if i % 2 == 0 else n_theta) + 1)
+    gmsh.model.mesh.setTransfiniteSurface(surf)
+    gmsh.model.mesh.setRecombine(2, surf)
+    volume = out[1][1]
+    lateral = [tag for dim, tag in out[2:] if dim == 2]
+    centres = {tag: gmsh.model.occ.getCenterOfMass(2, tag) for tag in lateral}
+    arcs = sorted((np.hypot(x, y), tag) for tag, (x, y, _) in centres.items() if min(x, y) > 1e-9)
+    return arcs[0][1], arcs[1][1], volume
+
+
+def two_rings(
+    comm: MPI.Comm,
+    radii: tuple[float, float, float] = (0.5, 0.75, 1.0),
+    interference: float = 1e-3,
+    thickness: float = 0.05,
+    inner: tuple[int, int] = (3, 10),
+    outer: tuple[int, int] = (3, 7),
+):
+    """Quarter rings with radial interference (quadratic geometry).
+
+    LOWER: inner ring a < r < b + interference, outer surface MASTER.
+    UPPER: outer ring b < r < c, inner surface SLAVE. ``inner``/``outer`` = (n_r, n_theta).
+    """
+    a, b, c = radii
+
+    def build():
+        _, s0, v0 = _ring_sector(a, b + interference, thickness, *inner)
+        s1, _, v1 = _ring_sector(b, c, thickness, *outer)
+        gmsh.model.addPhysicalGroup(3, [v0], LOWER)
+        gmsh.model.addPhysicalGroup(3, [v1], UPPER)
+        gmsh.model.addPhysicalGroup(2, [s0], MASTER)
+        gmsh.model.addPhysicalGroup(2, [s1], SLAVE)
+        gmsh.option.setNumber("Mesh.SecondOrderIncomplete", 0)
+        gmsh.model.mesh.generate(3)
+        gmsh.model.mesh.setOrder(2)
+
+    return _to_mesh(comm, build)
+
+
+def elastic_system(V, material, bcs, traction=None, facet_tags=None, traction_tag=None):
+    """Bulk stiffness A (with bcs) and load b (lifted, bc values set) of linear elasticity.
+
+    ``traction`` (a UFL vector [Pa]) acts on the facets tagged ``traction_tag``.
+    """
+    import ufl
+    from petsc4py import PETSc
+
+    import dolfinx.fem.petsc
+    from solver.elasticity import epsilon, sigma
+
+    mesh = V.mesh
+    u, v = ufl.TrialFunction(V), ufl.TestFunction(V)
+    a = dolfinx.fem.form(ufl.inner(sigma(u, material), epsilon(v)) * ufl.dx)
+    zero = dolfinx.fem.Constant(mesh, np.zeros(3))
+    L = ufl.inner(zero, v) * ufl.dx
+    if traction is not None:
+        ds = ufl.Measure("ds", domain=mesh, subdomain_data=facet_tags)
+        L += ufl.inner(traction, v) * ds(traction_tag)
+    L = dolfinx.fem.form(L)
+    A = dolfinx.fem.petsc.assemble_matrix(a, bcs=bcs)
+    A.assemble()
+    b = dolfinx.fem.petsc.assemble_vector(L)
+    dolfinx.fem.petsc.apply_lifting(b, [a], [bcs])
+    b.ghostUpdate(PETSc.InsertMode.ADD, PETSc.ScatterMode.REVERSE)
+    dolfinx.fem.petsc.set_bc(b, bcs)
+    return A, b
+
+
+def fixed(V, component: int, marker, value: float = 0.0):
+    """Dirichlet condition u[component] = value [m] on the boundary facets selected by ``marker``."""
+    from petsc4py import PETSc
+
+    mesh = V.mesh
+    facets = dolfinx.mesh.locate_entities_boundary(mesh, mesh.topology.dim - 1, marker)
+    dofs = dolfinx.fem.locate_dofs_topological(V.sub(component), mesh.topology.dim - 1, facets)
+    return dolfinx.fem.dirichletbc(PETSc.ScalarType(value), dofs, V.sub(component))
+
+
+def gathered(comm: MPI.Comm, a):
+    """Concatenation of a per-rank array over all ranks (for collective-safe assertions)."""
+    return np.concatenate(comm.allgather(np.asarray(a)))

@@ -1,0 +1,50 @@
+"""Contact patch test: two blocks pressed together through a non-matching flat interface.
+
+Base [0,1]^2 x [-0.5,0] on rollers at its bottom, block [0,1]^2 x [0,0.5] pushed down by
+delta at its top, symmetry rollers on x = 0 and y = 0: uniaxial stress, so the exact
+contact pressure is uniform, p = E delta / (H_base + H_block), for any friction.
+"""
+
+from mpi4py import MPI
+
+import numpy as np
+import pytest
+
+import dolfinx
+from contact_cases import MASTER, SLAVE, elastic_system, fixed, gathered, two_blocks
+from solver.contact import NitscheContact, Status
+from solver.elasticity import Material
+from solver.friction import FrictionLaw
+from solver.nonlinear import solve_contact_problem
+
+pytestmark = pytest.mark.mpi
+
+
+@pytest.mark.parametrize("degree", [1, 2])
+@pytest.mark.parametrize("theta", [1, 0, -1])
+@pytest.mark.parametrize("mu", [0.0, 0.5])
+def test_uniform_pressure(degree, theta, mu):
+    mesh, _, tags = two_blocks(MPI.COMM_WORLD, lower=(3, 3, 2), upper=(4, 5, 2))
+    V = dolfinx.fem.functionspace(mesh, ("Lagrange", degree, (3,)))
+    material = Material(E=1e9, nu=0.3)
+    delta = 1e-3
+    bcs = [
+        fixed(V, 2, lambda x: np.isclose(x[2], -0.5)),
+        fixed(V, 0, lambda x: np.isclose(x[0], 0.0)),
+        fixed(V, 1, lambda x: np.isclose(x[1], 0.0)),
+        fixed(V, 2, lambda x: np.isclose(x[2], 0.5), -delta),
+    ]
+    A, b = elastic_system(V, material, bcs)
+    contact = NitscheContact(V, tags, SLAVE, MASTER, material, FrictionLaw(mu, mu, 0.0), gamma0=10.0, theta=theta)
+    u = dolfinx.fem.Function(V)
+    result = solve_contact_problem(A, b, contact, u, bcs)
+    assert result.converged, result.message
+    p_exact = material.E * delta / 1.0
+    comm = mesh.comm
+    status, pressure, gap = (gathered(comm, a) for a in (contact.state.status, contact.state.pressure, contact.state.gap))
+    assert np.all(status != Status.OPEN)
+    assert np.allclose(pressure, p_exact, rtol=1e-2)
+    assert np.abs(gap).max() < 1e-6 * delta  # Nitsche is consistent: no penalty-like penetration
+    normal_force, friction_force = contact.forces()
+    assert normal_force == pytest.approx(p_exact * 1.0, rel=1e-2)
+    assert np.allclose(friction_force, 0.0, atol=1e-6 * normal_force)
