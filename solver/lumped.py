@@ -36,6 +36,7 @@ from enum import Enum
 import numpy as np
 import numpy.typing as npt
 from scipy.integrate import solve_ivp
+from scipy.linalg import eigh
 
 from solver.friction import FrictionLaw
 from solver.shell import JointStiffness
@@ -126,6 +127,12 @@ class LumpedModel:
         K = np.diag(self.stiffness) + self.springs.K_N * np.outer(self.a, self.a)
         Z = np.vstack([np.eye(3), self.b[:3]])  # q = Z r, w = b[:3] . r (xi = 0)
         return Z.T @ K @ Z
+
+    def stick_frequencies(self) -> npt.NDArray[np.float64]:
+        """Natural frequencies [Hz] of the closed, sticking joint (undamped, ascending)."""
+        Z = np.vstack([np.eye(3), self.b[:3]])
+        w2 = eigh(self.stick_stiffness(), Z.T @ np.diag(self.masses) @ Z, eigvals_only=True)
+        return np.sqrt(w2) / (2 * math.pi)
 
     def axial_stick_stiffness(self) -> float:
         """Axial stiffness of the TP in stick, other dofs condensed out [N/m]."""
