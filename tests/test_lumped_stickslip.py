@@ -138,3 +138,18 @@ def test_bad_input_raises(full_scale):
         AxialLoad(static=1.0, frequency=-2.0)
     with pytest.raises(ValueError, match="mass"):
         LumpedModel(0.0, model.springs, model.alpha, model.lever)
+
+
+def test_early_stop_only_when_the_joint_really_sticks_for_good(full_scale):
+    """A run stopped by the stick certificate ends where the full run's last transition
+    lies behind it, with the same final settlement."""
+    model = make_model(full_scale, FrictionLaw(0.5, 0.3, math.inf))
+    load = AxialLoad(static=model.mass * GRAVITY, amplitude=1.5 * model.mass * GRAVITY, frequency=10.0,
+                     harmonic_start=0.3)
+    stopped = simulate(model, load, 3.0, rtol=1e-9)
+    full = simulate(model, load, 3.0, rtol=1e-9, stop_when_stuck=False)
+    assert stopped.stuck_forever and stopped.t[-1] < 2.0
+    assert len(full.events) > 5
+    assert full.events[-1][0] <= stopped.t[-1]
+    assert full.events[-1][2] is Mode.STICK
+    assert stopped.final_settlement == pytest.approx(full.final_settlement, rel=1e-6)
