@@ -52,6 +52,67 @@ def assemble_structure(V: fem.FunctionSpace, material: Material, bcs: Sequence[f
 
 
 @dataclass
+class NewtonResult:
+    """Outcome of a Newton solve (same fields as ``solver.nonlinear.NewtonResult``)."""
+
+    converged: bool
+    iterations: int
+    residual_norms: list[float]
+
+
+class NewtonSolver:
+    """Generalised Newton for A u + r_c(u) = b, with an LU of A + dr_c/du at every iteration.
+
+    Converged when ||A u + r_c(u) - b|| <= max(atol, rtol ||b||) (clamped rows excluded).
+    Called like ``solver.nonlinear.solve_contact_problem``; the work matrix and the
+    solver are kept between calls with the same A.
+    """
+
+    def __init__(self, rtol: float = 1e-9, atol: float = 1e-12, max_iterations: int = 30):
+        self.rtol, self.atol, self.max_iterations = rtol, atol, max_iterations
+        self._A = None
+
+    def _prepare(self, A: PETSc.Mat, u: fem.Function, bcs: Sequence[fem.DirichletBC]) -> None:
+        if self._A is A:
+            return
+        V = u.function_space
+        owned = [bc.dof_indices()[0][: bc.dof_indices()[1]] for bc in bcs]
+        self._rows = np.unique(np.concatenate(owned)) if owned else np.zeros(0, np.int32)
+        offset = V.dofmap.index_map.local_range[0] * V.dofmap.index_map_bs
+        self._global_rows = (self._rows + offset).astype(PETSc.IntType)
+        self._r, self._du = A.createVecLeft(), A.createVecRight()
+        self._J = A.duplicate(copy=True)
+        self._ksp = _lu_solver(V.mesh.comm, self._J, "newton_")
+        self._A = A
+
+    def __call__(self, A: PETSc.Mat, b: PETSc.Vec, contact, u: fem.Function,
+                 bcs: Sequence[fem.DirichletBC]) -> NewtonResult:
+        self._prepare(A, u, bcs)
+        r, du, J = self._r, self._du, self._J
+        tol = max(self.atol, self.rtol * b.norm())
+        norms = []
+        for it in range(self.max_iterations + 1):
+            contact.update(u)
+            A.mult(u.x.petsc_vec, r)
+            r.axpy(1.0, contact.residual())
+            r.axpy(-1.0, b)
+            r.array_w[self._rows] = 0.0
+            norms.append(r.norm())
+            if norms[-1] <= tol:
+                return NewtonResult(True, it, norms)
+            if it == self.max_iterations or not np.isfinite(norms[-1]):
+                break
+            A.copy(J, structure=PETSc.Mat.Structure.SAME_NONZERO_PATTERN)
+            J.axpy(1.0, contact.jacobian(), structure=PETSc.Mat.Structure.SUBSET_NONZERO_PATTERN)
+            J.zeroRowsColumns(self._global_rows, diag=1.0)
+            self._ksp.setOperators(J)
+            self._ksp.solve(r, du)
+            u.x.petsc_vec.axpy(-1.0, du)
+            u.x.scatter_forward()
+        return NewtonResult(False, len(norms) - 1, norms)
+
+
+@dataclass
 class StepResult:
     """Outcome of one attempted time step."""
 
@@ -82,10 +143,11 @@ class Elastodynamics:
         self.V, self.M, self.K, self.bcs = V, M, K, list(bcs)
         self.scheme, self.damping, self.contact = scheme, damping, contact
         self.load = load
-        self.newton_options = dict(newton_options or {})
         if contact is not None and newton is None:
-            from solver.nonlinear import solve_contact_problem as newton
+            newton = NewtonSolver(**(newton_options or {}))
+            newton_options = {}
         self.newton = newton
+        self.newton_options = dict(newton_options or {})
         self.u, self.v, self.a = (fem.Function(V, name=n) for n in ("displacement", "velocity", "acceleration"))
         self.t = 0.0
         self._bc_dofs = self._homogeneous_bc_dofs()

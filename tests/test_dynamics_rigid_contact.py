@@ -1,0 +1,178 @@
+"""Dynamic Nitsche contact against a rigid plane: impacting bar and friction oscillator.
+
+1. Impacting elastic bar (Chouly, Hild & Renard 2015; Doyen, Ern & Piperno 2011):
+   bar (0, 1), E = rho = 1, clamped at x = 1, rigid wall at x = 0 (u(0) >= 0),
+   initial displacement u0 = 0.5 - 0.5 x, at rest. Exact solution (d'Alembert),
+   periodic with period 3: u(0, t) = 0.5 - t/2 on (0, 1), 0 on (1, 2) (contact,
+   pressure 1/2), (t - 2)/2 on (2, 3); energy 1/8.
+2. Friction oscillator: a stiff block (mass m) on a rigid plane under normal load N,
+   tied to ground by a spring k, driven by F0 cos(omega t + phi), Coulomb friction
+   F_f = mu N. Reference: Den Hartog's (1931) closed-form periodic motion without
+   stops, obtained from the half-period boundary-value problem
+   m x'' + k x = F0 cos(omega t + phi) - F_f, x(0) = -X0, x(pi/omega) = X0, x' = 0 at both.
+"""
+
+import numpy as np
+import pytest
+import ufl
+from mpi4py import MPI
+from petsc4py import PETSc
+from scipy.integrate import solve_ivp
+
+from dolfinx import fem, mesh
+from dolfinx.fem.petsc import assemble_vector
+
+from solver.dynamics import Elastodynamics, assemble_structure, run
+from solver.elasticity import Material
+from solver.friction import FrictionLaw
+from solver.loads import TopFaceLoad
+from solver.newmark import GeneralisedAlpha, QuasiStatic
+from solver.probes import PointProbe
+from solver.rigid_contact import SLIP, RigidPlaneContact
+
+pytestmark = pytest.mark.mpi
+
+
+def bar_exact(t: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """(u(0, t) [m], contact pressure [Pa]) of the impacting bar."""
+    t = np.mod(t, 3.0)
+    u = np.where(t < 1, 0.5 - 0.5 * t, np.where(t < 2, 0.0, 0.5 * (t - 2)))
+    return u, np.where((t > 1) & (t < 2), 0.5, 0.0)
+
+
+def impacting_bar(n: int, t_end: float = 3.0):
+    """Errors (L2 in time, relative to the L2 norm of the exact history) and energy range."""
+    domain = mesh.create_interval(MPI.COMM_WORLD, n, [0.0, 1.0])
+    V = fem.functionspace(domain, ("Lagrange", 1, (1,)))
+    material = Material(E=1.0, nu=0.0, rho=1.0)
+    bcs = [fem.dirichletbc(0.0, fem.locate_dofs_geometrical(V, lambda x: np.isclose(x[0], 1.0)), V)]
+    M, K = assemble_structure(V, material, bcs)
+    wall = mesh.locate_entities_boundary(domain, 0, lambda x: np.isclose(x[0], 0.0))
+    tags = mesh.meshtags(domain, 0, wall, np.full(len(wall), 1, dtype=np.int32))
+    contact = RigidPlaneContact(V, tags, 1, material, None, [0, 0, 0], [1, 0, 0], gamma0=1.0, theta=0.0)
+    problem = Elastodynamics(V, M, K, bcs, contact=contact)
+    problem.u.interpolate(lambda x: (0.5 - 0.5 * x[0])[None, :])
+    problem.initialise(0.0)
+    end = PointProbe(problem.u, [[0.0, 0.0, 0.0]])
+
+    def observe(p):
+        pressure = domain.comm.allreduce(contact.state.pressure.sum())  # one quadrature point: x = 0
+        return {"u0_m": end()[0, 0], "pressure_Pa": pressure, "energy_J": sum(p.energy())}
+
+    rows = run(problem, t_end, 1.0 / n, observers=[observe], progress=False)  # dt = h (CFL 1)
+    t, u, p, e = (np.array([r[k] for r in rows]) for k in ("time_s", "u0_m", "pressure_Pa", "energy_J"))
+    u_ex, p_ex = bar_exact(t)
+    error_u = np.sqrt(np.sum((u - u_ex) ** 2) / np.sum(u_ex**2))
+    error_p = np.sqrt(np.sum((p - p_ex) ** 2) / np.sum(p_ex**2))
+    return error_u, error_p, (e.min() - 0.125) / 0.125, (e.max() - 0.125) / 0.125
+
+
+def test_impacting_bar_converges_and_keeps_its_energy():
+    table = [(n, *impacting_bar(n)) for n in (20, 40, 80)]
+    if MPI.COMM_WORLD.rank == 0:
+        print("\n   n   err u(0,t)  err pressure  energy min/max - 1/8 (relative)")
+        for n, eu, ep, emin, emax in table:
+            print(f"{n:4d}  {eu:10.3e}  {ep:12.3e}  {emin:+.3e} / {emax:+.3e}")
+    eu = np.array([row[1] for row in table])
+    ep = np.array([row[2] for row in table])
+    assert np.all(np.diff(eu) < 0) and np.all(np.diff(ep) < 0)
+    rate_u, rate_p = np.log2(eu[0] / eu[-1]) / 2, np.log2(ep[0] / ep[-1]) / 2
+    assert rate_u > 0.5 and rate_p > 0.3, (rate_u, rate_p)
+    assert all(abs(row[3]) < 0.15 and abs(row[4]) < 0.15 for row in table)  # bounded
+    assert abs(table[-1][3]) < 0.03 and abs(table[-1][4]) < 0.03
+
+
+def den_hartog(m, k, F0, Ff, omega):
+    """Amplitude X0 [m], phase phi [rad] and x(t) on (0, pi/omega) of the non-stop periodic motion."""
+    wn = np.sqrt(k / m)
+    theta = np.pi * wn / omega
+    D = F0 / (k * (1 - (omega / wn) ** 2))
+    # x = C1 cos(wn t) + C2 sin(wn t) + D cos(omega t + phi) - Ff/k; x' = 0 at 0 and pi/omega
+    alpha, beta = np.linalg.solve([[0, wn], [-wn * np.sin(theta), wn * np.cos(theta)]], [omega * D, -omega * D])
+    s = 2 * Ff / k / (alpha * (1 + np.cos(theta)) + beta * np.sin(theta))  # x(pi/omega) = -x(0)
+    C1, C2 = alpha * s, beta * s
+    for c in (np.sqrt(1 - s * s), -np.sqrt(1 - s * s)):
+        X0, phi = Ff / k - C1 - D * c, np.arctan2(s, c)
+
+        def x(t, phi=phi):
+            return C1 * np.cos(wn * t) + C2 * np.sin(wn * t) + D * np.cos(omega * t + phi) - Ff / k
+
+        t = np.linspace(0, np.pi / omega, 2001)[1:-1]
+        if X0 > 0 and np.all(np.diff(x(t)) > 0):  # moves up throughout: no stop
+            return X0, phi, x
+    raise ValueError("no non-stop periodic motion for these parameters")
+
+
+M_BLOCK, K_SPRING, F0, MU = 1.0, (2 * np.pi) ** 2, 1.0, 0.3  # kg, N/m (1 Hz), N, -
+F_FRICTION, OMEGA = 0.2, 0.6 * 2 * np.pi  # N, rad/s
+
+
+def test_den_hartog_reference_solves_the_ode():
+    """The closed form against scipy's ODE solver over one upward half-period."""
+    X0, phi, x = den_hartog(M_BLOCK, K_SPRING, F0, F_FRICTION, OMEGA)
+    rhs = lambda t, y: [y[1], (F0 * np.cos(OMEGA * t + phi) - F_FRICTION - K_SPRING * y[0]) / M_BLOCK]
+    t = np.linspace(0, np.pi / OMEGA, 50)
+    sol = solve_ivp(rhs, (0, t[-1]), [-X0, 0.0], t_eval=t, rtol=1e-11, atol=1e-13)
+    assert np.max(np.abs(sol.y[0] - x(t))) < 1e-8 * X0
+    assert sol.y[0][-1] == pytest.approx(X0, rel=1e-8) and abs(sol.y[1][-1]) < 1e-8
+
+
+def test_friction_oscillator_matches_den_hartog():
+    X0, phi, x_half = den_hartog(M_BLOCK, K_SPRING, F0, F_FRICTION, OMEGA)
+    a = 0.1  # block side [m]; 2D, per unit thickness
+    domain = mesh.create_rectangle(MPI.COMM_WORLD, [[0, 0], [a, a]], [2, 2], mesh.CellType.quadrilateral)
+    V = fem.functionspace(domain, ("Lagrange", 1, (2,)))
+    material = Material(E=1e8, nu=0.0, rho=M_BLOCK / a**2)  # internal modes ~ kHz: a rigid block at 0.6 Hz
+    bottom = mesh.locate_entities_boundary(domain, 1, lambda x: np.isclose(x[1], 0.0))
+    top = mesh.locate_entities_boundary(domain, 1, lambda x: np.isclose(x[1], a))
+    facets = np.concatenate([bottom, top])
+    order = np.argsort(facets)
+    values = np.concatenate([np.full(len(bottom), 1), np.full(len(top), 2)]).astype(np.int32)
+    tags = mesh.meshtags(domain, 1, facets[order], values[order])
+    w = ufl.TestFunction(V)
+    spring = (K_SPRING / a**2) * ufl.TrialFunction(V)[0] * w[0] * ufl.dx  # spring to ground, total k
+    M, K = assemble_structure(V, material, [], extra_stiffness=spring)
+    friction = FrictionLaw(mu_s=MU, mu_d=MU, d_c=0.0)
+    contact = RigidPlaneContact(V, tags, 1, material, friction, [0, 0, 0], [0, 1, 0], gamma0=10.0, theta=0.0)
+    top_load = TopFaceLoad(V, tags, 2)
+    drive = assemble_vector(fem.form((1.0 / a**2) * w[0] * ufl.dx))  # unit total horizontal force
+    drive.ghostUpdate(addv=PETSc.InsertMode.ADD, mode=PETSc.ScatterMode.REVERSE)
+    normal = np.array([0.0, -F_FRICTION / MU, 0.0])
+
+    def load(t, out):
+        top_load.add(normal, out)
+        out.axpy(F0 * np.cos(OMEGA * t + phi), drive)
+
+    # static pre-load under N, then start on the periodic orbit: x = -X0, at rest
+    static = Elastodynamics(V, M, K, [], scheme=QuasiStatic(), contact=contact,
+                           load=lambda t, out: top_load.add(normal, out))
+    static.initialise(0.0)
+    assert static.step(1.0).converged
+    assert contact.normal_force() == pytest.approx(F_FRICTION / MU, rel=1e-6)
+    problem = Elastodynamics(V, M, K, [], scheme=GeneralisedAlpha.from_spectral_radius(0.5),
+                             contact=contact, load=load)
+    problem.u.x.array[:] = static.u.x.array
+    problem.u.x.array[0::2] -= X0
+    problem.initialise(0.0)
+    centre = PointProbe(problem.u, [[a / 2, a / 2, 0.0]])
+    statuses = []
+
+    def observe(p):
+        statuses.append(contact.state.status.copy())
+        return {"x_m": centre()[0, 0]}
+
+    period = 2 * np.pi / OMEGA
+    rows = run(problem, 2 * period, period / 100, observers=[observe], progress=False)
+    t = np.array([r["time_s"] for r in rows])
+    x = np.array([r["x_m"] for r in rows])
+    second = t > period
+    amplitude = 0.5 * (x[second].max() - x[second].min())
+    exact = np.where(np.mod(t, period) < period / 2, 1.0, -1.0) * x_half(np.mod(t, period / 2))
+    history_error = np.max(np.abs(x - exact)) / X0
+    print(f"\nfriction oscillator: amplitude {amplitude:.6f} m, Den Hartog {X0:.6f} m "
+          f"({amplitude / X0 - 1:+.2%}); max history error {history_error:.2%} of X0")
+    assert amplitude == pytest.approx(X0, rel=0.03)
+    assert history_error < 0.03
+    seen = np.concatenate(statuses) if statuses else np.zeros(0)
+    slipping = domain.comm.allreduce(int(np.sum(seen == SLIP)))
+    assert slipping > 0  # the block slides (and it is not glued by a wrong friction limit)
