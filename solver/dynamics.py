@@ -10,7 +10,9 @@ generalised-alpha, or quasi-static). Each step solves the effective system
     A u_{n+1} + r_c(u_{n+1}) = b,    A = K + c_M M + c_C C_Rayleigh,
 
 with a reused LU factorisation of A when there is no contact, and with
-``solve_contact_problem(A, b, contact, u, bcs)`` (semismooth Newton) when there is.
+``solver.nonlinear.solve_contact_problem`` (generalised Newton, LU of A + J_c reused
+across iterations and steps while dt is unchanged) when there is. The contact object
+is ``solver.contact.NitscheContact`` (two bodies) or ``solver.rigid_contact.RigidPlaneContact``.
 Modal damping is low rank and enters b explicitly through the Newmark-predicted
 velocity v_n + (1 - alpha_f) dt a_n (error O(dt^2), see ``solver.damping``).
 Dirichlet conditions must be homogeneous (clamped boundaries).
@@ -32,6 +34,7 @@ from dolfinx.fem import petsc as fem_petsc
 from solver.damping import ModalDamping, RayleighDamping
 from solver.elasticity import Material, epsilon, sigma
 from solver.newmark import GeneralisedAlpha, Scheme
+from solver.nonlinear import ContactNewtonSolver, solve_contact_problem
 
 Load = Callable[[float, PETSc.Vec], None]  #: load(t, out): write the load vector f(t) [N] into out
 
@@ -52,73 +55,13 @@ def assemble_structure(V: fem.FunctionSpace, material: Material, bcs: Sequence[f
 
 
 @dataclass
-class NewtonResult:
-    """Outcome of a Newton solve (same fields as ``solver.nonlinear.NewtonResult``)."""
-
-    converged: bool
-    iterations: int
-    residual_norms: list[float]
-
-
-class NewtonSolver:
-    """Generalised Newton for A u + r_c(u) = b, with an LU of A + dr_c/du at every iteration.
-
-    Converged when ||A u + r_c(u) - b|| <= max(atol, rtol ||b||) (clamped rows excluded).
-    Called like ``solver.nonlinear.solve_contact_problem``; the work matrix and the
-    solver are kept between calls with the same A.
-    """
-
-    def __init__(self, rtol: float = 1e-9, atol: float = 1e-12, max_iterations: int = 30):
-        self.rtol, self.atol, self.max_iterations = rtol, atol, max_iterations
-        self._A = None
-
-    def _prepare(self, A: PETSc.Mat, u: fem.Function, bcs: Sequence[fem.DirichletBC]) -> None:
-        if self._A is A:
-            return
-        V = u.function_space
-        owned = [bc.dof_indices()[0][: bc.dof_indices()[1]] for bc in bcs]
-        self._rows = np.unique(np.concatenate(owned)) if owned else np.zeros(0, np.int32)
-        offset = V.dofmap.index_map.local_range[0] * V.dofmap.index_map_bs
-        self._global_rows = (self._rows + offset).astype(PETSc.IntType)
-        self._r, self._du = A.createVecLeft(), A.createVecRight()
-        self._J = A.duplicate(copy=True)
-        self._ksp = _lu_solver(V.mesh.comm, self._J, "newton_")
-        self._A = A
-
-    def __call__(self, A: PETSc.Mat, b: PETSc.Vec, contact, u: fem.Function,
-                 bcs: Sequence[fem.DirichletBC]) -> NewtonResult:
-        self._prepare(A, u, bcs)
-        r, du, J = self._r, self._du, self._J
-        tol = max(self.atol, self.rtol * b.norm())
-        norms = []
-        for it in range(self.max_iterations + 1):
-            contact.update(u)
-            A.mult(u.x.petsc_vec, r)
-            r.axpy(1.0, contact.residual())
-            r.axpy(-1.0, b)
-            r.array_w[self._rows] = 0.0
-            norms.append(r.norm())
-            if norms[-1] <= tol:
-                return NewtonResult(True, it, norms)
-            if it == self.max_iterations or not np.isfinite(norms[-1]):
-                break
-            A.copy(J, structure=PETSc.Mat.Structure.SAME_NONZERO_PATTERN)
-            J.axpy(1.0, contact.jacobian(), structure=PETSc.Mat.Structure.SUBSET_NONZERO_PATTERN)
-            J.zeroRowsColumns(self._global_rows, diag=1.0)
-            self._ksp.setOperators(J)
-            self._ksp.solve(r, du)
-            u.x.petsc_vec.axpy(-1.0, du)
-            u.x.scatter_forward()
-        return NewtonResult(False, len(norms) - 1, norms)
-
-
-@dataclass
 class StepResult:
     """Outcome of one attempted time step."""
 
     converged: bool
     iterations: int = 0  #: Newton iterations (0 for a linear step)
     residual_norms: list[float] = field(default_factory=list)
+    message: str = ""
 
 
 def _lu_solver(comm: MPI.Comm, A: PETSc.Mat, prefix: str) -> PETSc.KSP:
@@ -139,15 +82,12 @@ class Elastodynamics:
     def __init__(self, V: fem.FunctionSpace, M: PETSc.Mat, K: PETSc.Mat, bcs: Sequence[fem.DirichletBC],
                  load: Load | None = None, scheme: Scheme = GeneralisedAlpha(),
                  damping: RayleighDamping | ModalDamping | None = None, contact=None,
-                 newton: Callable | None = None, newton_options: dict | None = None):
+                 newton_options: dict | None = None):
         self.V, self.M, self.K, self.bcs = V, M, K, list(bcs)
         self.scheme, self.damping, self.contact = scheme, damping, contact
         self.load = load
-        if contact is not None and newton is None:
-            newton = NewtonSolver(**(newton_options or {}))
-            newton_options = {}
-        self.newton = newton
-        self.newton_options = dict(newton_options or {})
+        self.newton_options = dict(newton_options or {})  #: options of solver.nonlinear.ContactNewtonSolver
+        self._newton = None
         self.u, self.v, self.a = (fem.Function(V, name=n) for n in ("displacement", "velocity", "acceleration"))
         self.t = 0.0
         self._bc_dofs = self._homogeneous_bc_dofs()
@@ -185,6 +125,10 @@ class Elastodynamics:
         self.A.axpy(c_M + c_C * a_R, self.M, structure=PETSc.Mat.Structure.SUBSET_NONZERO_PATTERN)
         self._ksp.setOperators(self.A)
         self._dt_of_A = dt
+        if self.contact is not None:  # Newton workspace (keeps an LU of A + J_c) for this A
+            if self._newton is not None:
+                self._newton.destroy()
+            self._newton = ContactNewtonSolver(self.A, self.bcs, **self.newton_options)
 
     def initialise(self, t0: float = 0.0) -> None:
         """Set t = t0 and the consistent initial acceleration M a0 = f(t0) - K u0 - C v0 - r_c(u0)."""
@@ -198,7 +142,9 @@ class Elastodynamics:
         if self.contact is not None:
             self.contact.set_reference(self.u, 1.0)
             self.contact.update(self.u)
-            self._r_contact_old = self.contact.residual().copy()
+            r = self.contact.residual()
+            r.copy(self._r_contact_old)
+            r.destroy()
             rhs.axpy(-1.0, self._r_contact_old)
         rhs.array_w[self._bc_dofs] = 0.0
         ksp = _lu_solver(self.V.mesh.comm, self.M, "dynamics_mass_")
@@ -268,8 +214,10 @@ class Elastodynamics:
             result = StepResult(converged=self._ksp.getConvergedReason() > 0)
         else:
             self.contact.set_reference(self.u, dt)
-            res = self.newton(self.A, self._b, self.contact, self.u, self.bcs, **self.newton_options)
-            result = StepResult(bool(res.converged), int(res.iterations), list(res.residual_norms))
+            # initial guess: constant-acceleration (dynamic) or constant-velocity (quasi-static) predictor
+            self.u.x.array[:] += dt * self.v.x.array + 0.5 * dt**2 * self.a.x.array
+            res = solve_contact_problem(self.A, self._b, self.contact, self.u, self.bcs, solver=self._newton)
+            result = StepResult(res.converged, res.iterations, res.residual_norms, res.message)
         if not result.converged:
             self.u.x.array[:] = u_old
             return result
@@ -278,7 +226,9 @@ class Elastodynamics:
         self.v.x.array[:], self.a.x.array[:] = v_new, a_new
         if self.contact is not None and self.scheme.alpha_f:
             self.contact.update(self.u)
-            self.contact.residual().copy(self._r_contact_old)
+            r = self.contact.residual()
+            r.copy(self._r_contact_old)
+            r.destroy()
         self._f_new.copy(self._f_old)
         self.t += dt
         return result
@@ -350,7 +300,8 @@ def run(problem: Elastodynamics, t_end: float, dt: float, dt_min: float | None =
                 accepted = 0
                 if h < dt_min:
                     raise RuntimeError(f"Newton did not converge at t = {problem.t:.6g} s even with dt = {step:.3g} s "
-                                       f"(minimum step {dt_min:.3g} s); last residuals {result.residual_norms[-3:]}")
+                                       f"(minimum step {dt_min:.3g} s): {result.message or 'no message'}; "
+                                       f"last residual norms {result.residual_norms[-3:]} N")
                 continue
             row = {"time_s": problem.t, "dt_s": step, "newton_iterations": result.iterations}
             for observe in observers:

@@ -145,19 +145,19 @@ class RigidPlaneContact:
         self.u.x.array[:] = u.x.array
 
     def residual(self) -> PETSc.Vec:
-        """Contact residual vector r_c(u) [N] (owned entries, ghosts accumulated)."""
+        """Contact residual vector r_c(u) [N] (a new vector owned by the caller)."""
         with self._b.localForm() as loc:
             loc.set(0.0)
         fem_petsc.assemble_vector(self._b, self._forms["residual"])
         self._b.ghostUpdate(addv=PETSc.InsertMode.ADD, mode=PETSc.ScatterMode.REVERSE)
-        return self._b
+        return self._b.copy()
 
     def jacobian(self) -> PETSc.Mat:
-        """Generalised derivative d r_c / d u [N/m] (no boundary conditions applied)."""
+        """Generalised derivative d r_c / d u [N/m], no boundary conditions (a new matrix owned by the caller)."""
         self._A.zeroEntries()
         fem_petsc.assemble_matrix(self._A, self._forms["jacobian"])
         self._A.assemble()
-        return self._A
+        return self._A.copy()
 
     def normal_force(self) -> float:
         """Total contact force int p ds [N] (per unit thickness in 2D), on every rank."""
