@@ -428,9 +428,7 @@ def simulate(
         modes.append(np.full(sol.t.size - 1, mode.value))
         t, y = float(sol.t[-1]), sol.y[:, -1].copy()
         if sol.status == 1:  # an event
-            new = dyn.select_mode(t, y) if mode is not Mode.STICK else _after_stick(sol)
-            if new is Mode.STICK:
-                y = dyn.project_stick(y)
+            new, y = _after_event(dyn, sol, mode, t, y)
             events.append((t, mode, new))
             mode = new
     Y = np.concatenate(ys, axis=1)
@@ -447,7 +445,24 @@ def simulate(
     )
 
 
-def _after_stick(sol) -> Mode:
-    """Mode after a stick-phase event: which event fired decides."""
-    fired = [i for i, te in enumerate(sol.t_events) if te.size]
-    return {0: Mode.OPEN, 1: Mode.SLIP_DOWN, 2: Mode.SLIP_UP}[fired[0]]
+def _after_event(dyn: _Dynamics, sol, mode: Mode, t: float, y) -> tuple[Mode, npt.NDArray]:
+    """Mode (and state) after the event that ended a segment: which event fired decides.
+
+    Event 0 is always the gap. In stick, events 1/2 are the friction limits (slip
+    down/up). In slip, event 1 is the slip rate reaching zero: then the joint sticks if
+    the friction it needs is admissible, else it slips the other way.
+    """
+    fired = next(i for i, te in enumerate(sol.t_events) if te.size)
+    if mode is Mode.OPEN:
+        return dyn.select_mode(t, y), y
+    if fired == 0:
+        return Mode.OPEN, y
+    if mode is Mode.STICK:
+        return (Mode.SLIP_DOWN if fired == 1 else Mode.SLIP_UP), y
+    y = dyn.project_stick(y)
+    q, qd = dyn.split(y)
+    N = dyn.normal_force(q)
+    T = dyn.stick_friction(t, q, qd, N)
+    if abs(T) <= dyn.mu_s * N:
+        return Mode.STICK, y
+    return (Mode.SLIP_DOWN if T > 0 else Mode.SLIP_UP), y
