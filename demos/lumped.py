@@ -27,27 +27,42 @@ from mpi4py import MPI  # noqa: E402
 import numpy as np  # noqa: E402
 
 from geometry.parameters import JointGeometry, load_geometry  # noqa: E402
-from solver.elasticity import Material  # noqa: E402
 from solver.friction import FrictionLaw  # noqa: E402
 from solver.lumped import GRAVITY, AxialLoad, LumpedModel, simulate  # noqa: E402
 from solver.shell import JointStiffness, joint_stiffness  # noqa: E402
 
 #: SPEC 7 sensitivity cases: (alpha [deg], beta [deg], mu_d)
-SENSITIVITY_CASES = ((1.05, 1.0, 0.3), (1.05, 1.0, 0.4), (1.05, 1.0, 0.2), (2.5, 1.5, 0.3), (2.5, 2.4, 0.3))
+SENSITIVITY_CASES = (
+    (1.05, 1.0, 0.3),
+    (1.05, 1.0, 0.4),
+    (1.05, 1.0, 0.2),
+    (2.5, 1.5, 0.3),
+    (2.5, 2.4, 0.3),
+)
 DROP_SPEED = math.sqrt(2 * GRAVITY * 0.1)  #: TP speed after a 10 cm free fall [m/s]
 
 
 def parse_args(argv: list[str] | None) -> argparse.Namespace:
     p = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    p.add_argument("--quick", action="store_true", help="coarse map grid and short runs (smoke test)")
+    p.add_argument(
+        "--quick", action="store_true", help="coarse map grid and short runs (smoke test)"
+    )
     p.add_argument("--output", default="output/lumped", help="output folder")
     p.add_argument("--case", default="cases/full_scale.toml", help="TOML case file (full scale)")
-    p.add_argument("--scaled-case", default="cases/scaled.toml", help="case whose springs are also printed")
+    p.add_argument(
+        "--scaled-case", default="cases/scaled.toml", help="case whose springs are also printed"
+    )
     p.add_argument("--mu-s", type=float, default=0.5, help="static friction coefficient")
-    p.add_argument("--mu-d", type=float, default=0.3, help="dynamic friction coefficient (base case)")
+    p.add_argument(
+        "--mu-d", type=float, default=0.3, help="dynamic friction coefficient (base case)"
+    )
     p.add_argument("--damping-ratio", type=float, default=0.01, help="fraction of critical per dof")
-    p.add_argument("--duration", type=float, default=None, help="harmonic loading time [s] (90; quick 2)")
-    p.add_argument("--settle-time", type=float, default=1.0, help="self-weight alone before the harmonic [s]")
+    p.add_argument(
+        "--duration", type=float, default=None, help="harmonic loading time [s] (90; quick 2)"
+    )
+    p.add_argument(
+        "--settle-time", type=float, default=1.0, help="self-weight alone before the harmonic [s]"
+    )
     p.add_argument("--f-max", type=float, default=20.0, help="largest map frequency [Hz]")
     p.add_argument("--amp-max", type=float, default=500e3, help="largest map amplitude [N]")
     p.add_argument("--n-freq", type=int, default=None, help="map frequencies (41; quick 5)")
@@ -79,7 +94,9 @@ def required_slip(joint: JointGeometry, alpha_deg: float, beta_deg: float) -> fl
     return joint.full_contact_overlap * (1.0 - ratio)
 
 
-def build_model(joint: JointGeometry, springs: JointStiffness, mass: float, args, mu_d: float) -> LumpedModel:
+def build_model(
+    joint: JointGeometry, springs: JointStiffness, mass: float, args, mu_d: float
+) -> LumpedModel:
     return LumpedModel(
         mass=mass,
         springs=springs,
@@ -115,8 +132,11 @@ def main(argv: list[str] | None = None) -> int:
     angle_cases = sorted({(a, b) for a, b, _ in SENSITIVITY_CASES})
     jobs = [(ab, with_angles(joint, *ab), material) for ab in angle_cases]
     jobs.append(("scaled", scaled_joint, scaled_material))
-    mine = {key: joint_stiffness(j, mat, tol=args.bvp_tol)
-            for n, (key, j, mat) in enumerate(jobs) if n % comm.size == comm.rank}
+    mine = {
+        key: joint_stiffness(j, mat, tol=args.bvp_tol)
+        for n, (key, j, mat) in enumerate(jobs)
+        if n % comm.size == comm.rank
+    }
     springs = {k: v for part in comm.allgather(mine) for k, v in part.items()}
     base = (SENSITIVITY_CASES[0][0], SENSITIVITY_CASES[0][1])
     base_model = build_model(joint, springs[base], mass, args, args.mu_d)
@@ -125,12 +145,27 @@ def main(argv: list[str] | None = None) -> int:
         print("Shell-theory springs (totals over the circumference; off-diagonal terms dropped):")
         for key, s in [(base, springs[base]), ("scaled", springs["scaled"])]:
             name = "scaled 1:10" if key == "scaled" else "full scale"
-            print(f"  {name:12s} K_r = {s.K_r:.4e} N/m   K_rot = {s.K_rot:.4e} N m/rad   "
-                  f"K_N = {s.K_N:.4e} N/m   K_T = {s.K_T:.4e} N/m   (free-edge TP radial {s.K_r_free:.4e} N/m)")
+            print(
+                f"  {name:12s} K_r = {s.K_r:.4e} N/m   K_rot = {s.K_rot:.4e} N m/rad   "
+                f"K_N = {s.K_N:.4e} N/m   K_T = {s.K_T:.4e} N/m   "
+                f"(free-edge TP radial {s.K_r_free:.4e} N/m)"
+            )
             rows.append([name, s.K_r, s.K_rot, s.K_N, s.K_T, s.K_r_free, s.m_r, s.J_rot, s.m_T])
-        write_csv(out / "stiffness.csv",
-                  ["case", "K_r_N_per_m", "K_rot_Nm_per_rad", "K_N_N_per_m", "K_T_N_per_m",
-                   "K_r_free_edge_N_per_m", "m_r_kg", "J_rot_kgm2", "m_T_kg"], rows)
+        write_csv(
+            out / "stiffness.csv",
+            [
+                "case",
+                "K_r_N_per_m",
+                "K_rot_Nm_per_rad",
+                "K_N_N_per_m",
+                "K_T_N_per_m",
+                "K_r_free_edge_N_per_m",
+                "m_r_kg",
+                "J_rot_kgm2",
+                "m_T_kg",
+            ],
+            rows,
+        )
         freqs = ", ".join(f"{f:.1f}" for f in base_model.stick_frequencies())
         print(f"  full-scale joint in stick: natural frequencies {freqs} Hz")
 
@@ -139,28 +174,43 @@ def main(argv: list[str] | None = None) -> int:
     mine = {}
     for n, ((alpha, beta, mu_d), v0) in enumerate(runs):
         if n % comm.size == comm.rank:
-            model = build_model(with_angles(joint, alpha, beta), springs[(alpha, beta)], mass, args, mu_d)
+            model = build_model(
+                with_angles(joint, alpha, beta), springs[(alpha, beta)], mass, args, mu_d
+            )
             mine[n] = simulate(model, AxialLoad(static=weight), 10.0, initial_velocity=v0)
     trajs = {k: v for part in comm.gather(mine, root=0) or [] for k, v in part.items()}
     histories = {}
     if root:
-        print(f"\nSelf-weight {weight / 1e3:.0f} kN (TP mass {mass / 1e3:.1f} t) released at first contact, "
-              f"mu_s = {args.mu_s}:")
+        print(
+            f"\nSelf-weight {weight / 1e3:.0f} kN (TP mass {mass / 1e3:.1f} t) "
+            "released at first contact, "
+            f"mu_s = {args.mu_s}:"
+        )
         rows = []
         for n, (alpha, beta, mu_d) in enumerate(SENSITIVITY_CASES):
             s, l_slip = trajs[n].final_settlement, required_slip(joint, alpha, beta)
-            print(f"  alpha/beta = {alpha}/{beta} deg, mu_d = {mu_d}: settlement {1e3 * s:7.1f} mm"
-                  f"   (L_slip {1e3 * l_slip:6.1f} mm, {'reached' if s >= l_slip else 'not reached'})")
+            print(
+                f"  alpha/beta = {alpha}/{beta} deg, mu_d = {mu_d}: settlement {1e3 * s:7.1f} mm"
+                f"   (L_slip {1e3 * l_slip:6.1f} mm, {'reached' if s >= l_slip else 'not reached'})"
+            )
             rows.append([alpha, beta, args.mu_s, mu_d, 1e3 * s, 1e3 * l_slip, int(s >= l_slip)])
-        write_csv(out / "self_weight.csv",
-                  ["alpha_deg", "beta_deg", "mu_s", "mu_d", "settlement_mm", "L_slip_mm", "reached"], rows)
+        write_csv(
+            out / "self_weight.csv",
+            ["alpha_deg", "beta_deg", "mu_s", "mu_d", "settlement_mm", "L_slip_mm", "reached"],
+            rows,
+        )
         histories = {"self-weight": trajs[0], "10 cm drop": trajs[len(SENSITIVITY_CASES)]}
-        print(f"\n10 cm drop (v0 = {DROP_SPEED:.2f} m/s), base case: settlement "
-              f"{1e3 * histories['10 cm drop'].final_settlement:.1f} mm (L_slip {1e3 * joint.required_slip:.1f} mm)")
+        print(
+            f"\n10 cm drop (v0 = {DROP_SPEED:.2f} m/s), base case: settlement "
+            f"{1e3 * histories['10 cm drop'].final_settlement:.1f} mm "
+            f"(L_slip {1e3 * joint.required_slip:.1f} mm)"
+        )
         for name, traj in histories.items():
-            write_csv(out / f"history_{name.replace(' ', '_')}.csv",
-                      ["time_s", "settlement_mm", "edge_radial_mm", "mode"],
-                      zip(traj.t, 1e3 * traj.q[0], 1e3 * traj.q[1], traj.mode))
+            write_csv(
+                out / f"history_{name.replace(' ', '_')}.csv",
+                ["time_s", "settlement_mm", "edge_radial_mm", "mode"],
+                zip(traj.t, 1e3 * traj.q[0], 1e3 * traj.q[1], traj.mode),
+            )
 
     # --- settlement map: runs shared over ranks --------------------------------------
     freqs = np.linspace(0.0, args.f_max, args.n_freq)
@@ -171,7 +221,9 @@ def main(argv: list[str] | None = None) -> int:
     for n, (i, k) in enumerate(grid):
         if n % comm.size != comm.rank:
             continue
-        load = AxialLoad(static=weight, amplitude=amps[k], frequency=freqs[i], harmonic_start=args.settle_time)
+        load = AxialLoad(
+            static=weight, amplitude=amps[k], frequency=freqs[i], harmonic_start=args.settle_time
+        )
         traj = simulate(model, load, args.settle_time + args.duration)
         mine.append((i, k, traj.final_settlement, traj.stuck_forever, len(traj.events), traj.t[-1]))
     gathered = comm.gather(mine, root=0)
@@ -181,18 +233,32 @@ def main(argv: list[str] | None = None) -> int:
         for i, k, s, stuck, n_events, t_last in sorted(r for part in gathered for r in part):
             settlement[i, k] = s
             rows.append([freqs[i], amps[k] / 1e3, 1e3 * s, int(stuck), n_events, t_last])
-        write_csv(out / "settlement_map.csv",
-                  ["frequency_Hz", "amplitude_kN", "settlement_mm", "proven_stuck", "transitions",
-                   "end_time_s"], rows)
+        write_csv(
+            out / "settlement_map.csv",
+            [
+                "frequency_Hz",
+                "amplitude_kN",
+                "settlement_mm",
+                "proven_stuck",
+                "transitions",
+                "end_time_s",
+            ],
+            rows,
+        )
         l_slip = joint.required_slip
         reached = settlement >= l_slip
-        print(f"\nSettlement after {args.duration:g} s of harmonic loading (after {args.settle_time:g} s of "
-              f"self-weight), {freqs[0]:g}-{freqs[-1]:g} Hz x {amps[0] / 1e3:g}-{amps[-1] / 1e3:g} kN, "
-              f"{freqs.size} x {amps.size} runs:")
-        print(f"  min {1e3 * np.nanmin(settlement):.1f} mm, max {1e3 * np.nanmax(settlement):.1f} mm "
-              f"at {freqs[np.nanargmax(settlement) // amps.size]:g} Hz, "
-              f"{amps[np.nanargmax(settlement) % amps.size] / 1e3:g} kN; "
-              f"L_slip = {1e3 * l_slip:.1f} mm reached in {int(reached.sum())} of {reached.size} runs")
+        print(
+            f"\nSettlement after {args.duration:g} s of harmonic loading "
+            f"(after {args.settle_time:g} s of self-weight), "
+            f"{freqs[0]:g}-{freqs[-1]:g} Hz x {amps[0] / 1e3:g}-{amps[-1] / 1e3:g} kN, "
+            f"{freqs.size} x {amps.size} runs:"
+        )
+        print(
+            f"  min {1e3 * np.nanmin(settlement):.1f} mm, max {1e3 * np.nanmax(settlement):.1f} mm "
+            f"at {freqs[np.nanargmax(settlement) // amps.size]:g} Hz, "
+            f"{amps[np.nanargmax(settlement) % amps.size] / 1e3:g} kN; "
+            f"L_slip = {1e3 * l_slip:.1f} mm reached in {int(reached.sum())} of {reached.size} runs"
+        )
         print(f"  runs that ended proven stuck: {sum(r[3] for r in rows)} of {len(rows)}")
         plot(out, freqs, amps, settlement, l_slip, histories, args)
         print(f"\nwrote {out}/ in {time.perf_counter() - t_start:.1f} s")
@@ -211,9 +277,13 @@ def plot(out: Path, freqs, amps, settlement, l_slip, histories, args) -> None:
     if np.nanmax(settlement) >= l_slip > np.nanmin(settlement):
         ax.contour(freqs, amps / 1e3, settlement.T, levels=[l_slip], colors="red", linewidths=2)
     bar.ax.axhline(1e3 * l_slip, color="red", linewidth=2)
-    ax.set_title(f"Settlement after {args.duration:g} s harmonic axial load "
-                 f"(red: L_slip = {1e3 * l_slip:.0f} mm" +
-                 ("" if np.nanmax(settlement) >= l_slip else ", not reached") + ")", fontsize=9)
+    ax.set_title(
+        f"Settlement after {args.duration:g} s harmonic axial load "
+        f"(red: L_slip = {1e3 * l_slip:.0f} mm"
+        + ("" if np.nanmax(settlement) >= l_slip else ", not reached")
+        + ")",
+        fontsize=9,
+    )
     ax.set_xlabel("frequency [Hz]")
     ax.set_ylabel("amplitude [kN]")
     fig.tight_layout()

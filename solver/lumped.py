@@ -67,10 +67,16 @@ class AxialLoad:
     harmonic_start: float = 0.0
 
     def __post_init__(self) -> None:
-        if self.ramp_time < 0 or self.frequency < 0 or self.amplitude < 0 or self.harmonic_start < 0:
+        if (
+            self.ramp_time < 0
+            or self.frequency < 0
+            or self.amplitude < 0
+            or self.harmonic_start < 0
+        ):
             raise ValueError(
                 "ramp_time, frequency, amplitude and harmonic_start must be >= 0, got "
-                f"{self.ramp_time} s, {self.frequency} Hz, {self.amplitude} N, {self.harmonic_start} s"
+                f"{self.ramp_time} s, {self.frequency} Hz, {self.amplitude} N, "
+                f"{self.harmonic_start} s"
             )
 
     def __call__(self, t: float) -> float:
@@ -252,7 +258,11 @@ class _Dynamics:
             T = self.friction(mode, t, q, qd, N)
             force = self.free_force(t, q, qd, N) - T * self.b
             return np.concatenate(
-                [qd, force / self.m, [self.load(t) * qd[0], float(qd @ (self.c * qd)), T * float(self.b @ qd)]]
+                [
+                    qd,
+                    force / self.m,
+                    [self.load(t) * qd[0], float(qd @ (self.c * qd)), T * float(self.b @ qd)],
+                ]
             )
 
         return f
@@ -262,11 +272,14 @@ class _Dynamics:
             fun.terminal, fun.direction = True, direction
             return fun
 
-        gap = lambda t, y: float(self.a @ y[0:4])  # noqa: E731
+        def gap(t, y):
+            return float(self.a @ y[0:4])
+
         if mode is Mode.OPEN:
             return [terminal(gap, 1)]
         evs = [terminal(gap, -1)]
         if mode is Mode.STICK:
+
             def slip_down(t, y):
                 q, qd = self.split(y)
                 N = self.normal_force(q)
@@ -317,7 +330,9 @@ class _Dynamics:
         base = np.zeros(8)
         base[0:4] = z0
         const_q = fun(base, 0.0)
-        cr = np.array([fun(np.concatenate([z0 + Z[:, i], np.zeros(4)]), 0.0) - const_q for i in range(3)])
+        cr = np.array(
+            [fun(np.concatenate([z0 + Z[:, i], np.zeros(4)]), 0.0) - const_q for i in range(3)]
+        )
         crd = np.array([fun(np.concatenate([z0, Z[:, i]]), 0.0) - const_q for i in range(3)])
         cF = fun(base, 1.0) - const_q
         return cr, crd, cF, const_q
@@ -358,6 +373,7 @@ class _Dynamics:
                 f = -self.c * qqd - self.k * qq - N * self.a
                 f[0] += F
                 return self.mu_s * N + sign * float(self.minv_b @ f) / self.b_minv_b
+
             return h
 
         def gap(state, F):
@@ -367,7 +383,9 @@ class _Dynamics:
             cr, crd, cF, c0 = self._affine_in_state(fun, Z, z0, t)
             mean = c0 + cr @ r_static + cF * load.static
             amp = abs(cr @ R + crd @ (1j * omega * R) + cF * load.amplitude)
-            bound = math.sqrt(2 * energy * (cr @ np.linalg.solve(Kr, cr) + crd @ np.linalg.solve(Mr, crd)))
+            bound = math.sqrt(
+                2 * energy * (cr @ np.linalg.solve(Kr, cr) + crd @ np.linalg.solve(Mr, crd))
+            )
             if not mean - amp > bound:
                 return False, float(r_static[0])
         return True, float(r_static[0])
@@ -419,7 +437,13 @@ def simulate(
                 break
             t_stop = min(t_end, t + check_interval)
         sol = solve_ivp(
-            dyn.rhs(mode), (t, t_stop), y, method=method, rtol=rtol, atol=atol, events=dyn.events(mode)
+            dyn.rhs(mode),
+            (t, t_stop),
+            y,
+            method=method,
+            rtol=rtol,
+            atol=atol,
+            events=dyn.events(mode),
         )
         if sol.status == -1:
             raise RuntimeError(f"integration failed at t = {t} s: {sol.message}")

@@ -28,6 +28,7 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass
+from itertools import pairwise
 
 import numpy as np
 import numpy.typing as npt
@@ -52,7 +53,7 @@ class Meridian:
             raise ValueError("a meridian needs at least two (r, z) vertices, with as many r as z")
         if not all(r > 0 for r in self.r):
             raise ValueError(f"meridian radii must be positive, got {self.r}")
-        if not all(b > a for a, b in zip(self.z[:-1], self.z[1:])):
+        if not all(b > a for a, b in pairwise(self.z)):
             raise ValueError(f"meridian heights must increase strictly, got {self.z}")
 
     @property
@@ -63,7 +64,9 @@ class Meridian:
     def split(self, z: float) -> Meridian:
         """The same meridian with an extra vertex at height ``z`` (no-op at a vertex)."""
         if not self.z[0] <= z <= self.z[-1]:
-            raise ValueError(f"height {z} m lies outside the meridian [{self.z[0]}, {self.z[-1]}] m")
+            raise ValueError(
+                f"height {z} m lies outside the meridian [{self.z[0]}, {self.z[-1]}] m"
+            )
         if np.isclose(self.z, z, rtol=0, atol=1e-12).any():
             return self
         i = int(np.searchsorted(self.z, z))
@@ -184,7 +187,7 @@ def solve_ring_load(
     tol: float = BVP_TOL,
     nodes: int = 60,
 ) -> RingLoadSolution:
-    """Static response to a ring load (H, V, M) [N/m, N/m, N m/m] on the circle at height ``load_z``.
+    """Static response to a ring load (H, V, M) [N/m, N/m, N m/m] at height ``load_z`` [m].
 
     ``clamped`` is ``"top"`` or ``"bottom"``: that end has u_r = u_z = beta = 0, the
     other end is free. The load may sit at the free end or anywhere in between.
@@ -197,7 +200,9 @@ def solve_ring_load(
     k = int(np.argmin(np.abs(np.asarray(mer.z) - load_z)))  # vertex index of the load
     P = np.asarray(load, dtype=float)
     rhss = [
-        _piece_rhs(shell, mer.r[i], mer.r[i + 1] - mer.r[i], mer.z[i + 1] - mer.z[i], mer.lengths[i])
+        _piece_rhs(
+            shell, mer.r[i], mer.r[i + 1] - mer.r[i], mer.z[i + 1] - mer.z[i], mer.lengths[i]
+        )
         for i in range(n)
     ]
 
@@ -253,9 +258,7 @@ def ring_flexibility(
     return F, sols
 
 
-def generalized_mass(
-    shell: Shell, sols: list[RingLoadSolution], weights: npt.ArrayLike
-) -> float:
+def generalized_mass(shell: Shell, sols: list[RingLoadSolution], weights: npt.ArrayLike) -> float:
     """Rayleigh mass [kg] of the shape sum_j weights_j * sols_j: 2 pi rho h int |u|^2 r ds.
 
     With ``weights`` the ring loads [N/m] that produce a unit generalized displacement
@@ -320,7 +323,9 @@ def mp_contact_shell(joint: JointGeometry, material: Material) -> tuple[Shell, f
     )
 
 
-def joint_stiffness(joint: JointGeometry, material: Material, tol: float = BVP_TOL) -> JointStiffness:
+def joint_stiffness(
+    joint: JointGeometry, material: Material, tol: float = BVP_TOL
+) -> JointStiffness:
     """Shell-theory springs and masses of the reduced model for any slip-joint geometry."""
     tp = tp_edge_shell(joint, material)
     F_tp, tp_sols = ring_flexibility(tp, 0.0, "top", tol)

@@ -24,7 +24,9 @@ def full_scale():
 
 def make_model(full_scale, friction: FrictionLaw, damping_ratio: float = 0.01) -> LumpedModel:
     joint, springs, mass = full_scale
-    return LumpedModel(mass, springs, joint.mp.half_angle, 0.5 * joint.tp.thickness, friction, damping_ratio)
+    return LumpedModel(
+        mass, springs, joint.mp.half_angle, 0.5 * joint.tp.thickness, friction, damping_ratio
+    )
 
 
 def test_constant_load_settles_at_the_closed_form_static_slip_position(full_scale):
@@ -44,7 +46,9 @@ def test_energy_dissipated_per_slip_event_equals_friction_work(full_scale):
     external work - damping - change of mechanical energy = int T xi' dt (1e-6 relative);
     over stick phases the friction does no work."""
     model = make_model(full_scale, FrictionLaw(0.5, 0.3, math.inf))
-    load = AxialLoad(static=model.mass * GRAVITY, amplitude=1.5 * model.mass * GRAVITY, frequency=10.0)
+    load = AxialLoad(
+        static=model.mass * GRAVITY, amplitude=1.5 * model.mass * GRAVITY, frequency=10.0
+    )
     traj = simulate(model, load, 0.6, rtol=1e-11, stop_when_stuck=False)
     energy = traj.mechanical_energy(model)
     w_ext, w_damp, w_fric = traj.work
@@ -62,7 +66,9 @@ def test_energy_dissipated_per_slip_event_equals_friction_work(full_scale):
 def _slip_matrix(model: LumpedModel, mu: float):
     """First-order system x' = A x + B F of the closed contact slipping down at mu."""
     m, c = model.masses, model.damping
-    k_slip = np.diag(model.stiffness) + model.springs.K_N * np.outer(model.a + mu * model.b, model.a)
+    k_slip = np.diag(model.stiffness) + model.springs.K_N * np.outer(
+        model.a + mu * model.b, model.a
+    )
     A = np.block([[np.zeros((4, 4)), np.eye(4)], [-k_slip / m[:, None], -np.diag(c / m)]])
     B = np.concatenate([np.zeros(4), [1.0 / m[0]], np.zeros(3)])
     return A, B
@@ -101,9 +107,13 @@ def test_slip_to_stick_transition_located_to_integrator_tolerance(full_scale, rt
 def test_stick_to_slip_transition_sits_on_the_friction_limit(full_scale):
     """At every stick -> slip event the friction force demanded by stick equals mu_s N."""
     model = make_model(full_scale, FrictionLaw(0.5, 0.3, math.inf))
-    load = AxialLoad(static=model.mass * GRAVITY, amplitude=1.5 * model.mass * GRAVITY, frequency=10.0)
+    load = AxialLoad(
+        static=model.mass * GRAVITY, amplitude=1.5 * model.mass * GRAVITY, frequency=10.0
+    )
     traj = simulate(model, load, 0.6, rtol=1e-10, stop_when_stuck=False)
-    onsets = [t for t, before, after in traj.events if before is Mode.STICK and after is not Mode.OPEN]
+    onsets = [
+        t for t, before, after in traj.events if before is Mode.STICK and after is not Mode.OPEN
+    ]
     assert len(onsets) >= 2
     m, c, k = model.masses, model.damping, model.stiffness
     for t in onsets:
@@ -144,8 +154,12 @@ def test_early_stop_only_when_the_joint_really_sticks_for_good(full_scale):
     """A run stopped by the stick certificate ends where the full run's last transition
     lies behind it, with the same final settlement."""
     model = make_model(full_scale, FrictionLaw(0.5, 0.3, math.inf))
-    load = AxialLoad(static=model.mass * GRAVITY, amplitude=1.5 * model.mass * GRAVITY, frequency=10.0,
-                     harmonic_start=0.3)
+    load = AxialLoad(
+        static=model.mass * GRAVITY,
+        amplitude=1.5 * model.mass * GRAVITY,
+        frequency=10.0,
+        harmonic_start=0.3,
+    )
     stopped = simulate(model, load, 3.0, rtol=1e-9)
     full = simulate(model, load, 3.0, rtol=1e-9, stop_when_stuck=False)
     assert stopped.stuck_forever and stopped.t[-1] < 2.0

@@ -2,6 +2,7 @@
 solution, convergence of the collocation solution, and the cone -> cylinder limit."""
 
 import math
+from itertools import pairwise
 
 import numpy as np
 import pytest
@@ -61,7 +62,7 @@ def test_collocation_converges_to_the_closed_form_field():
         w = sol.pieces[0](x / L)[0]
         errors.append(np.abs(w - exact).max() / exact.max())
         nodes.append(sol.pieces[0].interpolant.x.size)
-    assert all(e2 < e1 for e1, e2 in zip(errors, errors[1:])), errors
+    assert all(e2 < e1 for e1, e2 in pairwise(errors)), errors
     order = math.log(errors[0] / errors[-1]) / math.log(nodes[-1] / nodes[0])
     assert order > 3.0, (errors, nodes)
     assert errors[-1] < 1e-7

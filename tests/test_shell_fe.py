@@ -41,8 +41,15 @@ def fe_edge_radial_flexibility(comm, part, material, options, q: float) -> float
     a = ufl.inner(sigma(u, material), epsilon(v)) * ufl.dx
     L = ufl.inner(traction, v) * ds(tags.BOTTOM)
     problem = dolfinx.fem.petsc.LinearProblem(
-        a, L, bcs=[clamp(V, facets, [tags.TOP])], petsc_options_prefix="shell_fe_",
-        petsc_options={"ksp_type": "preonly", "pc_type": "lu", "pc_factor_mat_solver_type": "mumps"},
+        a,
+        L,
+        bcs=[clamp(V, facets, [tags.TOP])],
+        petsc_options_prefix="shell_fe_",
+        petsc_options={
+            "ksp_type": "preonly",
+            "pc_type": "lu",
+            "pc_factor_mat_solver_type": "mumps",
+        },
     )
     uh = problem.solve()
     mean = fem.assemble_scalar(fem.form(ufl.inner(uh, e_r) * ds(tags.BOTTOM)))
@@ -60,7 +67,9 @@ def test_scaled_tp_radial_edge_stiffness_matches_3d_fe():
     r_mid = tp_edge_shell(joint, material).meridian.r[0]
     K_shell, K_fe = 2 * math.pi * r_mid / F_shell[0, 0], 2 * math.pi * r_mid / f_fe
     if MPI.COMM_WORLD.rank == 0:
-        print(f"\nscaled TP radial edge stiffness: shell {K_shell:.5e} N/m, 3D FE {K_fe:.5e} N/m, "
-              f"ratio {K_fe / K_shell:.4f}")
+        print(
+            f"\nscaled TP radial edge stiffness: shell {K_shell:.5e} N/m, 3D FE {K_fe:.5e} N/m, "
+            f"ratio {K_fe / K_shell:.4f}"
+        )
     assert np.isfinite(K_fe)
     assert K_fe == pytest.approx(K_shell, rel=0.05)
