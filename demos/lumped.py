@@ -19,7 +19,7 @@ import sys
 import time
 from pathlib import Path
 
-sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
+sys.path.insert(0, str(Path(__file__).resolve().parents[1]))  # repo packages
 
 from solver import backend  # noqa: E402,F401  (before mpi4py)
 from mpi4py import MPI  # noqa: E402
