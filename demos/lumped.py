@@ -56,6 +56,12 @@ def parse_args(argv: list[str] | None) -> argparse.Namespace:
     p.add_argument(
         "--mu-d", type=float, default=0.3, help="dynamic friction coefficient (base case)"
     )
+    p.add_argument(
+        "--d-c",
+        type=float,
+        default=math.inf,
+        help="friction decay [s/m] of mu(v) (inf: step from mu_s to mu_d, SPEC 7)",
+    )
     p.add_argument("--damping-ratio", type=float, default=0.01, help="fraction of critical per dof")
     p.add_argument(
         "--duration", type=float, default=None, help="harmonic loading time [s] (90; quick 2)"
@@ -76,6 +82,11 @@ def parse_args(argv: list[str] | None) -> argparse.Namespace:
         p.error("--duration, --settle-time and --f-max must be positive, --amp-max >= 0")
     if args.n_freq < 2 or args.n_amp < 2:
         p.error("--n-freq and --n-amp must be at least 2")
+    try:
+        for mu_d in {args.mu_d} | {case[2] for case in SENSITIVITY_CASES}:
+            FrictionLaw(args.mu_s, mu_d, args.d_c)
+    except ValueError as e:
+        p.error(str(e))
     return args
 
 
@@ -102,7 +113,7 @@ def build_model(
         springs=springs,
         alpha=joint.mp.half_angle,
         lever=0.5 * joint.tp.thickness,
-        friction=FrictionLaw(args.mu_s, mu_d, math.inf),
+        friction=FrictionLaw(args.mu_s, mu_d, args.d_c),
         damping_ratio=args.damping_ratio,
     )
 
