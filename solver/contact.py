@@ -79,6 +79,10 @@ class NitscheContact:
             height normal to the facet (cell volume / facet area) [m].
         theta: 1 symmetric, 0 non-symmetric (incomplete), -1 skew-symmetric variant.
         quadrature_degree: degree of the slave facet quadrature (default 2 p + 1 for degree p).
+        lagged_friction: evaluate mu at each point's slip speed of the previous step (set at
+            ``set_reference``) instead of the current one. The step is then a Coulomb problem
+            with a fixed coefficient field: more robust generalized Newton when mu(v) decays
+            steeply (velocity weakening can make the active set cycle), first-order lag in time.
         chunk: points processed at once in the Jacobian (bounds memory).
 
     Call ``set_reference(u_old, dt)`` at the start of each step and ``update(u)`` at each
@@ -101,6 +105,7 @@ class NitscheContact:
         gamma0: float = 100.0,
         theta: int = 1,
         quadrature_degree: int | None = None,
+        lagged_friction: bool = False,
         chunk: int = 2000,
     ):
         if theta not in (1, 0, -1):
@@ -119,6 +124,7 @@ class NitscheContact:
         self.theta = theta
         self.gamma0 = gamma0
         self.chunk = chunk
+        self.lagged_friction = lagged_friction
         self.slave = SlaveQuadrature(V, facet_tags, slave_tag, qdeg)
         self.master = MasterSurface(V, facet_tags, master_tag)
         self.gamma = gamma0 * material.E / self.slave.h  #: Nitsche parameter per point [Pa/m]
@@ -140,6 +146,10 @@ class NitscheContact:
         if dt is not None and not dt > 0:
             raise ValueError(f"time step dt must be positive (or None for rate-free steps), got {dt}")
         self.dt = dt
+        previous = getattr(self, "state", None)
+        self._speed_old = (
+            np.linalg.norm(previous.slip_velocity, axis=1) if previous is not None else np.zeros(self.slave.num_points)
+        )
         self._u_old_slave = self.slave.displacement(u_old)
         self._u_old_master = self.master.displacement(u_old)
 
@@ -175,7 +185,7 @@ class NitscheContact:
         lam_n = np.where(active, P_n, 0.0)
         pressure = -lam_n
         speed = np.zeros(len(x)) if self.dt is None else np.linalg.norm(ds, axis=1) / self.dt
-        mu = self.friction.coefficient(speed)
+        mu = self.friction.coefficient(self._speed_old if self.lagged_friction else speed)
         radius = mu * pressure
         norm_Pt = np.linalg.norm(P_t, axis=1)
         stick = active & (norm_Pt <= radius)
@@ -289,7 +299,7 @@ class NitscheContact:
             proj = np.eye(3) - np.einsum("pi,pj->pij", q, q)
             d = (mu * p / norm)[:, None, None] * np.einsum("pij,pjk->pik", proj, Bt[s])
             d_radius = -mu[:, None] * Bn[s]
-            if self.dt is not None:
+            if self.dt is not None and not self.lagged_friction:
                 ds = self._ds[idx[s]]
                 ds_norm = np.linalg.norm(ds, axis=1)
                 e = np.divide(ds, ds_norm[:, None], out=np.zeros_like(ds), where=ds_norm[:, None] > 0)

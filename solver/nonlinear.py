@@ -8,9 +8,10 @@ and boundary values applied (``apply_lifting``, ``set_bc``), as for a linear sol
 Linear solves reuse one LU factorisation: each Newton correction solves
 (A + J_c(u_k)) du = -F(u_k) by GMRES (right preconditioning, true residual) with the
 LU factors of A + J_c at an earlier iterate as preconditioner. J_c only touches the
-interface dofs and changes only where contact states change, so GMRES needs few
-iterations; when it needs more than ``refactor_after`` (or fails) the current
-A + J_c is factorised. The correction is still the exact Newton step (to the Krylov
+interface dofs and changes mostly where contact states change, so GMRES often needs
+few iterations; when it fails within ``refactor_after`` iterations the current A + J_c
+is factorised, and when a solve's GMRES time exceeded the last factorisation's time
+the next correction refactorises (so the policy adapts to problem size and machine). The correction is still the exact Newton step (to the Krylov
 tolerance), so the generalized Newton convergence rate is kept. The workspace (and
 its factorisation) can be kept across steps while A is unchanged.
 """
@@ -67,6 +68,7 @@ class ContactNewtonSolver:
             A + J_c at every Newton iteration (plain Newton with direct solves).
         krylov_rtol: relative tolerance of the GMRES correction solve.
         lu_solver: PETSc factorisation package ("mumps", "superlu_dist", "petsc").
+        max_backtracks: step halvings when a Newton step increases ||F|| (0: plain Newton).
     """
 
     def __init__(
@@ -80,6 +82,7 @@ class ContactNewtonSolver:
         refactor_after: int = 25,
         krylov_rtol: float = 1e-11,
         lu_solver: str = "mumps",
+        max_backtracks: int = 0,
     ):
         if max_iterations < 1:
             raise ValueError(f"max_iterations must be >= 1, got {max_iterations}")
@@ -91,6 +94,7 @@ class ContactNewtonSolver:
         self.rtol, self.atol, self.stol = rtol, atol, stol
         self.max_iterations = max_iterations
         self.refactor_after = refactor_after
+        self.max_backtracks = max_backtracks
         rows = []
         for bc in bcs:
             dofs, _ = bc.dof_indices()
@@ -112,9 +116,12 @@ class ContactNewtonSolver:
         pc.setType(PETSc.PC.Type.LU)
         pc.setFactorSolverType(lu_solver)
         self._P: PETSc.Mat | None = None
+        self._factor_time = 0.0
+        self._refactor_next = False
         self.factorizations = 0
 
     def _factorise(self, J: PETSc.Mat, op: PETSc.Mat) -> None:
+        t0 = time.perf_counter()
         if self._P is not None:
             self._P.destroy()
         self._P = self.A.copy()
@@ -124,14 +131,19 @@ class ContactNewtonSolver:
         self.ksp.setUp()
         self.ksp.getPC().setReusePreconditioner(True)
         self.factorizations += 1
+        self._factor_time = time.perf_counter() - t0
 
     def _correction(self, J: PETSc.Mat, F: PETSc.Vec, du: PETSc.Vec, timings: dict) -> int:
-        """Solve (A + J) du = -F; returns GMRES iterations (refactorising when needed)."""
+        """Solve (A + J) du = -F; returns GMRES iterations (refactorising when needed).
+
+        The factors are reused while that is cheaper: after a solve whose GMRES iterations
+        cost more time than the last factorisation, the next correction refactorises.
+        """
         op = PETSc.Mat().createPython(self.A.getSizes(), _SumOperator(self.A, J), comm=self.A.getComm())
         op.setUp()
         rhs = F.copy()
         rhs.scale(-1.0)
-        fresh = self._P is None or self.refactor_after == 0
+        fresh = self._P is None or self.refactor_after == 0 or self._refactor_next
         t0 = time.perf_counter()
         if fresh:
             self._factorise(J, op)
@@ -147,13 +159,57 @@ class ContactNewtonSolver:
             timings["factorise"] += time.perf_counter() - t1
             self.ksp.solve(rhs, du)
             its += self.ksp.getIterationNumber()
-        timings["linear solve"] += time.perf_counter() - t0
+            fresh = True
+        elapsed = time.perf_counter() - t0
+        timings["linear solve"] += elapsed
+        self._refactor_next = not fresh and elapsed > self._factor_time
         reason = self.ksp.getConvergedReason()
         op.destroy()
         rhs.destroy()
         if reason <= 0:
             raise RuntimeError(f"linear solve failed (KSP reason {reason})")
         return its
+
+    def _residual(self, b: PETSc.Vec, contact: NitscheContact, u: dolfinx.fem.Function, F: PETSc.Vec, timings: dict) -> float:
+        """F = A u - b + r_c(u) (contact updated at u, zero on Dirichlet rows); returns ||F||."""
+        t0 = time.perf_counter()
+        contact.update(u)
+        t1 = time.perf_counter()
+        rc = contact.residual()
+        with rc.localForm() as loc:
+            loc.array[self._bc_local[self._bc_local < loc.array.size]] = 0.0
+        self.A.mult(u.x.petsc_vec, F)
+        F.axpy(-1.0, b)
+        F.axpy(1.0, rc)
+        rc.destroy()
+        timings["contact update"] += t1 - t0
+        timings["contact assembly"] += time.perf_counter() - t1
+        return F.norm()
+
+    def _line_search(self, b, contact, u, x0, du, F, norm: float, timings: dict) -> float:
+        """Take the Newton step, halving it (up to ``max_backtracks`` times) while ||F|| grows.
+
+        Generalized Newton on stick/slip/open switches can cycle (e.g. with velocity-weakening
+        friction); backtracking breaks such cycles. If no trial step lowers ||F||, the one with
+        the smallest ||F|| is kept. Leaves u, F and the contact state at the accepted point.
+        """
+        x = u.x.petsc_vec
+        x.copy(x0)
+        best = (np.inf, 1.0)
+        alpha = 1.0
+        for _ in range(self.max_backtracks + 1):
+            x0.copy(x)
+            x.axpy(alpha, du)
+            u.x.scatter_forward()
+            trial = self._residual(b, contact, u, F, timings)
+            if trial < norm or not self.max_backtracks:
+                return trial
+            best = min(best, (trial, alpha))
+            alpha *= 0.5
+        x0.copy(x)
+        x.axpy(best[1], du)
+        u.x.scatter_forward()
+        return self._residual(b, contact, u, F, timings)
 
     def solve(self, b: PETSc.Vec, contact: NitscheContact, u: dolfinx.fem.Function) -> NewtonResult:
         """Solve A u + r_c(u) = b for u (initial guess: u on entry, Dirichlet values imposed)."""
@@ -163,26 +219,15 @@ class ContactNewtonSolver:
         x = u.x.petsc_vec
         F = x.duplicate()
         du = x.duplicate()
+        x0 = x.duplicate()
         norms, linear = [], []
         timings = {"contact update": 0.0, "contact assembly": 0.0, "factorise": 0.0, "linear solve": 0.0}
         b_norm = b.norm()
         factorizations0 = self.factorizations
         result = None
         step_small = False
+        norm = self._residual(b, contact, u, F, timings)
         for k in range(self.max_iterations + 1):
-            t0 = time.perf_counter()
-            contact.update(u)
-            t1 = time.perf_counter()
-            rc = contact.residual()
-            timings["contact update"] += t1 - t0
-            with rc.localForm() as loc:
-                loc.array[self._bc_local[self._bc_local < loc.array.size]] = 0.0
-            self.A.mult(x, F)
-            F.axpy(-1.0, b)
-            F.axpy(1.0, rc)
-            rc.destroy()
-            norm = F.norm()
-            timings["contact assembly"] += time.perf_counter() - t1
             norms.append(norm)
             if not np.isfinite(norm):
                 result = NewtonResult(False, k, norms, linear, message=f"residual is not finite at iteration {k}")
@@ -201,14 +246,13 @@ class ContactNewtonSolver:
                 linear.append(self._correction(J, F, du, timings))
             except (PETSc.Error, RuntimeError) as err:
                 result = NewtonResult(False, k, norms, linear, message=f"linear solve failed at Newton iteration {k}: {err}")
-                J.destroy()
                 break
-            J.destroy()
-            x.axpy(1.0, du)
-            u.x.scatter_forward()
+            finally:
+                J.destroy()
+            norm = self._line_search(b, contact, u, x0, du, F, norm, timings)
             step_small = du.norm(PETSc.NormType.INFINITY) <= self.stol * x.norm(PETSc.NormType.INFINITY)
-        F.destroy()
-        du.destroy()
+        for vec in (F, du, x0):
+            vec.destroy()
         result.factorizations = self.factorizations - factorizations0
         result.timings = timings
         return result

@@ -166,3 +166,62 @@ def fixed(V, component: int, marker, value: float = 0.0):
 def gathered(comm: MPI.Comm, a):
     """Concatenation of a per-rank array over all ranks (for collective-safe assertions)."""
     return np.concatenate(comm.allgather(np.asarray(a)))
+
+
+def sliding_block(
+    comm: MPI.Comm, friction, steps: int, slide_per_step: float, dt: float | None, theta: int = 1, lagged: bool = False, **newton
+):
+    """Block (0.5 x 0.5 x 0.25 m) pressed on a clamped base by q = 1 MPa and dragged by its top face.
+
+    The top face's x displacement grows by ``slide_per_step`` [m] per step (u_y = 0 there),
+    the rest of the top face is loaded by the pressure. Returns (history, contact, solver
+    results) with history rows (T / N, stick fraction, slip fraction) where T is the
+    horizontal reaction of the top face (from the bulk stress) and N = q A the normal load.
+    """
+    import ufl
+    from petsc4py import PETSc
+
+    import dolfinx.fem.petsc
+    from solver.contact import NitscheContact, Status
+    from solver.elasticity import Material, epsilon, sigma
+    from solver.nonlinear import ContactNewtonSolver
+
+    H, q = 0.25, 1e6
+    mesh, _, tags = two_blocks(comm, heights=(H, H), lower=(4, 4, 2), upper=(3, 3, 2), inset=0.25)
+    V = dolfinx.fem.functionspace(mesh, ("Lagrange", 1, (3,)))
+    material = Material(E=1e9, nu=0.3)
+    top = dolfinx.mesh.locate_entities_boundary(mesh, 2, lambda x: np.isclose(x[2], H))
+    top_tags = dolfinx.mesh.meshtags(mesh, 2, top, np.full(len(top), 1, np.int32))
+    drag = dolfinx.fem.Constant(mesh, 0.0)
+    top_x = dolfinx.fem.locate_dofs_topological(V.sub(0), 2, top)
+    bcs = [fixed(V, c, lambda x: np.isclose(x[2], -H)) for c in range(3)]
+    bcs += [fixed(V, 1, lambda x: np.isclose(x[2], H)), dolfinx.fem.dirichletbc(drag, top_x, V.sub(0))]
+    u_, v_ = ufl.TrialFunction(V), ufl.TestFunction(V)
+    a = dolfinx.fem.form(ufl.inner(sigma(u_, material), epsilon(v_)) * ufl.dx)
+    load = dolfinx.fem.Constant(mesh, np.array([0.0, 0.0, -q]))
+    L = dolfinx.fem.form(ufl.inner(load, v_) * ufl.Measure("ds", domain=mesh, subdomain_data=top_tags)(1))
+    A = dolfinx.fem.petsc.assemble_matrix(a, bcs=bcs)
+    A.assemble()
+    u, u_old = dolfinx.fem.Function(V), dolfinx.fem.Function(V)
+    reaction = dolfinx.fem.form(ufl.inner(sigma(u, material), epsilon(v_)) * ufl.dx)
+    owned_x = top_x[top_x < V.dofmap.index_map.size_local * 3]
+    contact = NitscheContact(V, tags, SLAVE, MASTER, material, friction, gamma0=10.0, theta=theta, lagged_friction=lagged)
+    solver = ContactNewtonSolver(A, bcs, **({"max_iterations": 40, "refactor_after": 0} | newton))
+    N = q * 0.5 * 0.5
+    history, results = [], []
+    for k in range(1, steps + 1):
+        drag.value = k * slide_per_step
+        b = dolfinx.fem.petsc.assemble_vector(L)
+        dolfinx.fem.petsc.apply_lifting(b, [a], [bcs])
+        b.ghostUpdate(PETSc.InsertMode.ADD, PETSc.ScatterMode.REVERSE)
+        dolfinx.fem.petsc.set_bc(b, bcs)
+        contact.set_reference(u_old, dt)
+        results.append(solver.solve(b, contact, u))
+        r = dolfinx.fem.petsc.assemble_vector(reaction)
+        r.ghostUpdate(PETSc.InsertMode.ADD, PETSc.ScatterMode.REVERSE)
+        T = comm.allreduce(r.array[owned_x].sum(), op=MPI.SUM)
+        status = gathered(comm, contact.state.status)
+        history.append((T / N, np.mean(status == Status.STICK), np.mean(status == Status.SLIP)))
+        u_old.x.array[:] = u.x.array
+    solver.destroy()
+    return np.array(history), contact, results
