@@ -32,15 +32,14 @@ from solver.modes import classify  # noqa: E402
 from geometry import tags  # noqa: E402
 
 REFINEMENTS = [  # (label, overrides) -- the first one is the default discretisation
-    ("48 around, 0.08 m, p=2 (default)", []),
-    ("24 around, p=2", ["mesh.n_circumferential=24"]),
-    ("64 around, p=2", ["mesh.n_circumferential=64"]),
-    ("96 around, p=2", ["mesh.n_circumferential=96"]),
-    ("0.04 m axially, p=2", ["mesh.axial_size=0.04"]),
-    ("2 layers through the wall, p=2", ["mesh.n_layers=2"]),
-    ("24 around, p=3", ["mesh.n_circumferential=24", "modal.degree=3"]),
-    ("32 around, p=3", ["mesh.n_circumferential=32", "modal.degree=3"]),
-    ("48 around, p=3", ["modal.degree=3"]),
+    ("24 around, 0.08 m, p=3 (default)", []),
+    ("32 around, p=3", ["modal.n_circumferential=32"]),
+    ("0.04 m axially, p=3", ["mesh.axial_size=0.04"]),
+    ("24 around, p=2", ["modal.degree=2"]),
+    ("48 around, p=2", ["modal.n_circumferential=48", "modal.degree=2"]),
+    ("64 around, p=2", ["modal.n_circumferential=64", "modal.degree=2"]),
+    ("96 around, p=2", ["modal.n_circumferential=96", "modal.degree=2"]),
+    ("48 around, p=3", ["modal.n_circumferential=48"]),
 ]
 
 

@@ -22,7 +22,7 @@ from solver.case import read_case
 from solver.modal_joint import JointCase, joint_modes
 from solver.modal_report import JointParts, describe_modes, format_table, write_outputs
 
-QUICK = ["mesh.n_circumferential=24", "mesh.axial_size=0.2", "modal.n_modes=10"]
+QUICK = ["modal.degree=2", "mesh.axial_size=0.2", "modal.n_modes=10"]
 
 
 def main(argv: list[str] | None = None) -> int:
@@ -39,7 +39,9 @@ def main(argv: list[str] | None = None) -> int:
         help="override a case entry, e.g. modal.n_modes=30",
     )
     parser.add_argument(
-        "--quick", action="store_true", help="coarse smoke run (24 around, 0.2 m, 10 modes)"
+        "--quick",
+        action="store_true",
+        help="coarse smoke run (24 around, 0.2 m, degree 2, 10 modes)",
     )
     parser.add_argument("--output", default="output/modal", help="output folder")
     args = parser.parse_args(argv)

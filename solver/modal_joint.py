@@ -3,7 +3,8 @@
 Settings come from the ``[modal]`` table of a case file (all optional)::
 
     [modal]
-    degree = 2           # Lagrange degree of the displacement
+    degree = 3           # Lagrange degree of the displacement
+    n_circumferential = 24  # elements around for the modal mesh (0: use [mesh])
     n_modes = 20         # lowest modes wanted
     band_height = 0.05   # bonded band at the TP lower edge [m]
     gamma0 = 100.0       # Nitsche parameter of the tie [-]
@@ -13,7 +14,7 @@ Settings come from the ``[modal]`` table of a case file (all optional)::
 
 import time
 from collections.abc import Callable
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 from typing import Any
 
 from solver import backend  # noqa: F401  (before dolfinx)
@@ -37,7 +38,8 @@ CLAMPABLE = ("MP_CLAMPED", "TP_TOP")  #: end conditions: facet groups that may b
 class ModalSettings:
     """Discretisation and coupling of the joint's modal analysis (SI units)."""
 
-    degree: int = 2
+    degree: int = 3  #: chosen from the convergence table in docs/modal.md
+    n_circumferential: int = 24  #: elements around for the modal mesh; 0: the [mesh] value
     n_modes: int = 20
     band_height: float = 0.05  #: [m]
     gamma0: float = 100.0  #: [-]
@@ -47,6 +49,10 @@ class ModalSettings:
     def __post_init__(self) -> None:
         if self.degree not in (1, 2, 3, 4):
             raise ValueError(f"degree must be 1..4, got {self.degree}")
+        if not (isinstance(self.n_circumferential, int) and self.n_circumferential >= 0):
+            raise ValueError(
+                f"n_circumferential must be an integer >= 0, got {self.n_circumferential!r}"
+            )
         if not (isinstance(self.n_modes, int) and self.n_modes >= 1):
             raise ValueError(f"n_modes must be an integer >= 1, got {self.n_modes!r}")
         if not self.band_height > 0:
@@ -106,13 +112,16 @@ def joint_modes(
     """Lowest modes of the installed joint: by default MP bottom clamped and TP top free; the
     TP tied to the MP over ``band_height`` at its lower edge (collective)."""
     t0 = time.perf_counter()
-    mesh_data = create_joint_mesh(comm, case.joint, case.mesh)
+    mesh_options = case.mesh
+    if case.modal.n_circumferential:
+        mesh_options = replace(mesh_options, n_circumferential=case.modal.n_circumferential)
+    mesh_data = create_joint_mesh(comm, case.joint, mesh_options)
     V = fem.functionspace(mesh_data.mesh, ("Lagrange", case.modal.degree, (3,)))
     n_dofs = V.dofmap.index_map.size_global * V.dofmap.index_map_bs
     t1 = time.perf_counter()
     log(
-        f"mesh: {case.mesh.n_circumferential} around, {case.mesh.axial_size} m axially, degree "
-        f"{case.modal.degree}: {n_dofs} dofs ({t1 - t0:.1f} s)"
+        f"mesh: {mesh_options.n_circumferential} around, {mesh_options.axial_size} m axially, "
+        f"degree {case.modal.degree}: {n_dofs} dofs ({t1 - t0:.1f} s)"
     )
     clamped = [getattr(tags, name) for name in case.modal.clamped]
     bcs = [clamp(V, mesh_data.facet_tags, clamped)] if clamped else []

@@ -132,7 +132,7 @@ def test_nitsche_parameter_barely_matters(stack):
     np.testing.assert_allclose(f[0], f[1], rtol=2e-3)
 
 
-QUICK = ["mesh.n_circumferential=24", "mesh.axial_size=0.2", "modal.n_modes=6"]
+QUICK = ["modal.n_circumferential=24", "modal.degree=2", "mesh.axial_size=0.2", "modal.n_modes=6"]
 
 
 @pytest.fixture(scope="module")
