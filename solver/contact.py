@@ -32,7 +32,6 @@ from petsc4py import PETSc
 
 import numpy as np
 import numpy.typing as npt
-import scipy.sparse
 
 import dolfinx
 import dolfinx.fem.petsc
@@ -106,7 +105,7 @@ class NitscheContact:
         theta: int = 1,
         quadrature_degree: int | None = None,
         lagged_friction: bool = False,
-        chunk: int = 2000,
+        chunk: int = 500,
     ):
         if theta not in (1, 0, -1):
             raise ValueError(f"theta must be 1 (symmetric), 0 (non-symmetric) or -1 (skew), got {theta}")
@@ -165,7 +164,7 @@ class NitscheContact:
         previous = self.pairing.facet if hasattr(self, "pairing") else None
         self.pairing = p = pair(x, self.master, disp, previous=previous)
         n = -p.normal
-        grad_u = np.einsum("pni,pnj->pij", self._u_slave_nodes, slave.gradients)
+        grad_u = self._u_slave_nodes.transpose(0, 2, 1) @ slave.gradients
         eps = 0.5 * (grad_u + grad_u.transpose(0, 2, 1))
         mat = self.material
         sig = 2 * mat.mu * eps + mat.lmbda * np.trace(eps, axis1=1, axis2=2)[:, None, None] * np.eye(gdim)
@@ -284,11 +283,11 @@ class NitscheContact:
         return b
 
     def _tangent_rows(self, idx, Sn, St, G, D, normal_tied, stick, slip, consistent: bool):
-        """d lambda_n (q, ndof) and d lambda_t (q, 3, ndof) for the given per-point states."""
+        """d lambda_n (q, ndof), d lambda_t (q, 3, ndof) and the tied-point mask for the given states."""
         gam = self.gamma[idx]
         Bn = Sn + gam[:, None] * G
         Bt = St - gam[:, None, None] * D
-        dlam_n = np.where(normal_tied[:, None], Bn, 0.0)
+        dlam_n = np.where(normal_tied[:, None], Bn, 0.0)  # (tied points only are used)
         dlam_t = np.where(stick[:, None, None], Bt, 0.0)
         if consistent and slip.any():
             s = np.flatnonzero(slip)
@@ -306,33 +305,61 @@ class NitscheContact:
                 dmu = self.friction.derivative(self._speed[idx[s]])
                 d_radius += (p * dmu / self.dt)[:, None] * np.einsum("pi,pik->pk", e, D[s])
             dlam_t[s] = d + q[:, :, None] * d_radius[:, None, :]
-        return dlam_n, dlam_t
+        return dlam_n, dlam_t, normal_tied
 
     def _assemble_matrix(self, tangent) -> PETSc.Mat:
-        """Assemble sum_q w (-theta/gamma (Sn Sn + St St) + 1/gamma (A_n dlam_n + A_t^T dlam_t))."""
+        """Assemble sum_q w (-theta/gamma (Sn Sn + St St) + 1/gamma (A_n dlam_n + A_t^T dlam_t)).
+
+        The slave-only Nitsche term is summed per slave facet, the tie terms (only at points
+        whose normal is tied) per (slave facet, master facet) pair, before the COO insertion
+        (PETSc sums the remaining duplicates, also across ranks).
+        """
         th = self.theta
-        N = self._sizes[1]
-        total = scipy.sparse.csr_matrix((N, N))
+        nq = self.slave.points_per_facet
+        nsd = self.slave.values.shape[1] * self.slave.gdim
+        rows, cols, vals = [], [], []
+
+        def add(dofs, K):
+            nd = dofs.shape[1]
+            rows.append(np.repeat(dofs, nd, axis=1).ravel())
+            cols.append(np.tile(dofs, (1, nd)).ravel())
+            vals.append(K.ravel())
+
+        def group_sum(key, K):
+            order = np.argsort(key, kind="stable")
+            key = key[order]
+            starts = np.flatnonzero(np.r_[True, key[1:] != key[:-1]])
+            return order[starts], np.add.reduceat(K[order], starts, axis=0)
+
         for idx in self._chunks():
             Sn, St, G, D = self._operators(idx)
-            dlam_n, dlam_t = tangent(idx, Sn, St, G, D)
+            dlam_n, dlam_t, tied = tangent(idx, Sn, St, G, D)
             gam = self.gamma[idx]
             w = (self.slave.weights[idx] / gam)[:, None, None]
-            An = th * Sn + gam[:, None] * G
-            At = th * St - gam[:, None, None] * D
-            K = -th * (np.einsum("pk,pl->pkl", Sn, Sn) + np.einsum("pik,pil->pkl", St, St))
-            K += np.einsum("pk,pl->pkl", An, dlam_n) + np.einsum("pik,pil->pkl", At, dlam_t)
-            dofs = self._global_dofs(idx)
-            nd = dofs.shape[1]
-            r = np.repeat(dofs, nd, axis=1).ravel()
-            c = np.tile(dofs, (1, nd)).ravel()
-            total = total + scipy.sparse.csr_matrix(((w * K).ravel(), (r, c)), shape=(N, N))
-        coo = total.tocoo()
+            slave_facet = idx // nq
+            if th != 0:
+                Ss, Ts = Sn[:, :nsd], St[:, :, :nsd]
+                Ks = -th * w * (Ss[:, :, None] * Ss[:, None, :] + Ts.transpose(0, 2, 1) @ Ts)
+                first, Ks = group_sum(slave_facet, Ks)
+                add(self._global_dofs(idx[first])[:, :nsd], Ks)
+            t = np.flatnonzero(tied)
+            if t.size:
+                An = th * Sn[t] + gam[t, None] * G[t]
+                At = th * St[t] - gam[t, None, None] * D[t]
+                K = w[t] * (An[:, :, None] * dlam_n[t][:, None, :] + At.transpose(0, 2, 1) @ dlam_t[t])
+                key = slave_facet[t] * self.master.num_facets + self.pairing.facet[idx[t]]
+                first, K = group_sum(key, K)
+                add(self._global_dofs(idx[t[first]]), K)
         A = PETSc.Mat().create(comm=self.V.mesh.comm)
         A.setSizes((self._sizes, self._sizes), bsize=3)
         A.setType(PETSc.Mat.Type.AIJ)
-        A.setPreallocationCOO(coo.row.astype(PETSc.IntType), coo.col.astype(PETSc.IntType))
-        A.setValuesCOO(coo.data, addv=PETSc.InsertMode.INSERT_VALUES)
+        if rows:
+            rows, cols, vals = np.concatenate(rows), np.concatenate(cols), np.concatenate(vals)
+        else:
+            rows = cols = np.zeros(0, PETSc.IntType)
+            vals = np.zeros(0)
+        A.setPreallocationCOO(rows.astype(PETSc.IntType), cols.astype(PETSc.IntType))
+        A.setValuesCOO(vals, addv=PETSc.InsertMode.INSERT_VALUES)
         A.assemble()
         return A
 

@@ -38,6 +38,16 @@ def _facet_maps(cell: basix.CellType) -> tuple[npt.NDArray, npt.NDArray, basix.C
     return origin, axes, facet_cell
 
 
+def _combine(N: npt.NDArray, X: npt.NDArray) -> npt.NDArray:
+    """sum_n N[p, n] X[p, n, i] (batched matrix product)."""
+    return (N[:, None, :] @ X)[:, 0, :]
+
+
+def _gradient(dN: npt.NDArray, X: npt.NDArray) -> npt.NDArray:
+    """sum_n dN[d, p, n] X[p, n, i] -> [p, i, d] (batched matrix product)."""
+    return (dN.transpose(1, 0, 2) @ X).transpose(0, 2, 1)
+
+
 def _clip_to_facet(s: npt.NDArray, facet_cell: basix.CellType) -> npt.NDArray:
     """Clip reference facet coordinates into the unit square / unit triangle."""
     s = np.clip(s, 0.0, 1.0)
@@ -156,9 +166,9 @@ class MasterSurface:
         rows = np.arange(len(facet))[:, None]
         cg = el.tabulate(el.coord_element, X, 1)[:, rows, el.coord_closure[lf]]
         cv = el.tabulate(el.element, X, 1)[:, rows, el.closure[lf]]
-        y = np.einsum("pn,pni->pi", cg[0], self.coords[facet]) + np.einsum("pn,pni->pi", cv[0], disp[facet])
-        dydX = np.einsum("dpn,pni->pid", cg[1:], self.coords[facet]) + np.einsum("dpn,pni->pid", cv[1:], disp[facet])
-        dyds = np.einsum("pid,pdk->pik", dydX, el.axes[lf])
+        y = _combine(cg[0], self.coords[facet]) + _combine(cv[0], disp[facet])
+        dydX = _gradient(cg[1:], self.coords[facet]) + _gradient(cv[1:], disp[facet])
+        dyds = dydX @ el.axes[lf]
         return y, dyds, cv[0]
 
     def centroids(self, disp: npt.NDArray) -> npt.NDArray:
@@ -219,7 +229,7 @@ class SlaveQuadrature:
     def displacement(self, u: dolfinx.fem.Function) -> npt.NDArray:
         """Displacement at the slave points, shape (np, gdim) [m]."""
         values = u.x.array.reshape(-1, self.gdim)[self.dofs]
-        return np.einsum("pn,pni->pi", self.values, values)
+        return _combine(self.values, values)
 
 
 @dataclass
@@ -246,7 +256,7 @@ def pair(
     x: npt.NDArray,
     master: MasterSurface,
     disp: npt.NDArray,
-    candidates: int = 6,
+    candidates: int = 4,
     search_radius: float | None = None,
     max_iterations: int = 25,
     tol: float = 1e-12,
@@ -279,15 +289,17 @@ def pair(
     xp = np.repeat(x, k, axis=0)
     centre = 0.5 if el.facet_cell == basix.CellType.quadrilateral else 1 / 3
     s = np.full((len(cand), 2), centre)
+    moving = np.arange(len(cand))
     for _ in range(max_iterations):
-        y, dyds, _ = master.evaluate(cand, s, disp)
-        r = xp - y
-        H = np.einsum("pik,pil->pkl", dyds, dyds)
-        rhs = np.einsum("pik,pi->pk", dyds, r)
-        s_new = _clip_to_facet(s + np.linalg.solve(H, rhs[..., None])[..., 0], el.facet_cell)
-        step = np.abs(s_new - s).max()
-        s = s_new
-        if step < tol:
+        y, dyds, _ = master.evaluate(cand[moving], s[moving], disp)
+        r = xp[moving] - y
+        dydsT = dyds.transpose(0, 2, 1)
+        step = np.linalg.solve(dydsT @ dyds, dydsT @ r[:, :, None])[..., 0]
+        s_new = _clip_to_facet(s[moving] + step, el.facet_cell)
+        change = np.abs(s_new - s[moving]).max(axis=1)
+        s[moving] = s_new
+        moving = moving[change >= tol]
+        if moving.size == 0:
             break
     y, dyds, _ = master.evaluate(cand, s, disp)
     dist = np.linalg.norm(xp - y, axis=1).reshape(npts, k)

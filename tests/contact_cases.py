@@ -175,7 +175,7 @@ def sliding_block(
 
     The top face's x displacement grows by ``slide_per_step`` [m] per step (u_y = 0 there),
     the rest of the top face is loaded by the pressure. Returns (history, contact, solver
-    results) with history rows (T / N, stick fraction, slip fraction) where T is the
+    results, u) with history rows (T / N, stick fraction, slip fraction) where T is the
     horizontal reaction of the top face (from the bulk stress) and N = q A the normal load.
     """
     import ufl
@@ -224,4 +224,4 @@ def sliding_block(
         history.append((T / N, np.mean(status == Status.STICK), np.mean(status == Status.SLIP)))
         u_old.x.array[:] = u.x.array
     solver.destroy()
-    return np.array(history), contact, results
+    return np.array(history), contact, results, u

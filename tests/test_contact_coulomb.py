@@ -19,7 +19,7 @@ pytestmark = pytest.mark.mpi
 
 def test_stick_then_slide_at_mu_s():
     friction = FrictionLaw(mu_s=0.3, mu_d=0.3, d_c=0.0)
-    history, _, results = sliding_block(MPI.COMM_WORLD, friction, steps=8, slide_per_step=2e-4, dt=None)
+    history, _, results, _ = sliding_block(MPI.COMM_WORLD, friction, steps=8, slide_per_step=2e-4, dt=None)
     assert all(r.converged for r in results), [r.message for r in results]
     ratio, stick, slip = history.T
     # first step: well below the threshold, the interface mostly sticks (slip only at the edges)
@@ -35,7 +35,7 @@ def test_sliding_force_follows_velocity_law(dt, lagged):
     """Implicit mu(|v|) with its consistent derivative, and mu lagged by one step."""
     friction = FrictionLaw(mu_s=0.5, mu_d=0.4, d_c=5000.0)
     slide = 2e-4
-    history, contact, results = sliding_block(
+    history, contact, results, _ = sliding_block(
         MPI.COMM_WORLD, friction, steps=10, slide_per_step=slide, dt=dt, lagged=lagged
     )
     assert all(r.converged for r in results), [r.message for r in results]
@@ -48,6 +48,6 @@ def test_sliding_force_follows_velocity_law(dt, lagged):
 def test_distributed_equals_serial():
     """The whole sliding history is the same on all ranks' mesh and on an undistributed copy."""
     friction = FrictionLaw(mu_s=0.5, mu_d=0.4, d_c=5000.0)
-    distributed, _, _ = sliding_block(MPI.COMM_WORLD, friction, steps=4, slide_per_step=2e-4, dt=1.0)
-    serial, _, _ = sliding_block(MPI.COMM_SELF, friction, steps=4, slide_per_step=2e-4, dt=1.0)
+    distributed, *_ = sliding_block(MPI.COMM_WORLD, friction, steps=4, slide_per_step=2e-4, dt=1.0)
+    serial, *_ = sliding_block(MPI.COMM_SELF, friction, steps=4, slide_per_step=2e-4, dt=1.0)
     assert np.allclose(distributed, serial, rtol=1e-8, atol=1e-10)
