@@ -10,7 +10,7 @@
 # 2-rank tests, demo --quick runs). It prints the suite's result, its wall time
 # and the installed versions of the listed packages.
 #
-# Usage (as root; needs debootstrap: apt-get update && apt-get install debootstrap):
+# Usage (as root; needs debootstrap: apt-get update && apt-get install -y debootstrap):
 #   docker/check_debootstrap.sh [--root DIR] [--source DIR] [--suite SUITE]
 #                               [--mirror URL] [--demo] [-- CTEST_ARGS...]
 #   --root DIR    root filesystem, kept and reused (default /var/tmp/slipjoint-sid)
@@ -42,8 +42,6 @@ done
 packages=$source_dir/docker/packages.txt
 dockerfile=$source_dir/docker/Dockerfile
 [ "$(id -u)" = 0 ] || { echo "check_debootstrap.sh: must run as root (debootstrap, chroot, mounts)" >&2; exit 2; }
-command -v debootstrap >/dev/null ||
-    { echo "check_debootstrap.sh: debootstrap missing: apt-get update && apt-get install -y debootstrap" >&2; exit 2; }
 for f in "$packages" "$dockerfile" "$source_dir/CMakeLists.txt"; do
     [ -r "$f" ] || { echo "check_debootstrap.sh: $f not found: is $source_dir a slipjoint checkout?" >&2; exit 2; }
 done
@@ -52,20 +50,13 @@ case "$root" in "$source_dir"|"$source_dir"/*)
 esac
 
 # 1. Base system, once (the equivalent of `FROM debian:sid-DATE`).
-if [ ! -e "$root/.slipjoint-debootstrap-done" ]; then
-    echo "== debootstrap $suite into $root"
-    rm -rf "$root"
-    debootstrap --variant=minbase "$suite" "$root" "$mirror"
-    # The reachable archive may serve an expired Release file.
-    echo 'Acquire::Check-Valid-Until "false";' > "$root/etc/apt/apt.conf.d/99slipjoint-check-valid-until"
-    touch "$root/.slipjoint-debootstrap-done"
-fi
+"$here/debootstrap_base.sh" "$root" "$suite" "$mirror"
 cp /etc/resolv.conf "$root/etc/resolv.conf"
 
 # 2. The image's packages (idempotent: installs or upgrades to packages.txt).
 echo "== apt packages from $packages"
 mkdir -p "$root/tmp/slipjoint-docker"
-cp "$packages" "$here/apt_install.sh" "$root/tmp/slipjoint-docker/"
+cp "$packages" "$source_dir/docker/apt_install.sh" "$root/tmp/slipjoint-docker/"
 chroot "$root" sh /tmp/slipjoint-docker/apt_install.sh /tmp/slipjoint-docker/packages.txt >"$root/tmp/slipjoint-docker/apt.log" 2>&1 ||
     { tail -n 30 "$root/tmp/slipjoint-docker/apt.log"; echo "check_debootstrap.sh: package installation failed" >&2; exit 1; }
 
