@@ -20,7 +20,6 @@ pytestmark = pytest.mark.mpi  # imports the DOLFINx stack (for its versions)
 
 ROOT = Path(__file__).resolve().parents[1]
 CODE_DIRS = ("solver", "geometry", "demos", "tests", "benchmarks")
-LOCAL_MODULES = {"solver", "geometry", "demos", "tests", "conftest"}
 WHEEL_ONLY = "dolfinx_solver"  # PyPI wheel only; imported in solver/backend.py alone
 
 # Import name -> Debian package that provides it, where not python3-<name>.
@@ -94,9 +93,11 @@ def test_upstream_glob_strips_epoch_and_revision():
 
 
 def test_every_third_party_import_has_a_debian_package(packages):
+    # the project's packages and the helper modules beside the scripts and tests
+    local = set(CODE_DIRS) | {path.stem for path in python_files()}
     missing = {}
     for path in python_files():
-        for name in top_level_imports(path) - LOCAL_MODULES - {WHEEL_ONLY}:
+        for name in top_level_imports(path) - local - {WHEEL_ONLY}:
             if name in sys.stdlib_module_names:
                 continue
             package = DEBIAN_PACKAGE_OF.get(name, f"python3-{name}")
