@@ -78,8 +78,8 @@ def parse_args(argv: list[str] | None) -> argparse.Namespace:
     args.duration = args.duration if args.duration is not None else (2.0 if args.quick else 90.0)
     args.n_freq = args.n_freq if args.n_freq is not None else (5 if args.quick else 41)
     args.n_amp = args.n_amp if args.n_amp is not None else (3 if args.quick else 11)
-    if not (args.duration > 0 and args.settle_time > 0 and args.f_max > 0 and args.amp_max >= 0):
-        p.error("--duration, --settle-time and --f-max must be positive, --amp-max >= 0")
+    if not (args.duration > 0 and args.settle_time >= 0 and args.f_max > 0 and args.amp_max >= 0):
+        p.error("--duration and --f-max must be positive, --settle-time and --amp-max >= 0")
     if args.n_freq < 2 or args.n_amp < 2:
         p.error("--n-freq and --n-amp must be at least 2")
     try:
@@ -283,7 +283,10 @@ def plot(out: Path, freqs, amps, settlement, l_slip, histories, args) -> None:
     import matplotlib.pyplot as plt
 
     fig, ax = plt.subplots(figsize=(7, 4.5))
-    mesh = ax.pcolormesh(freqs, amps / 1e3, 1e3 * settlement.T, shading="nearest", cmap="viridis")
+    top = 1e3 * max(np.nanmax(settlement), 1.05 * l_slip)  # L_slip always on the colour scale
+    mesh = ax.pcolormesh(
+        freqs, amps / 1e3, 1e3 * settlement.T, shading="nearest", cmap="viridis", vmin=0.0, vmax=top
+    )
     bar = fig.colorbar(mesh, ax=ax, label="settlement [mm]")
     if np.nanmax(settlement) >= l_slip > np.nanmin(settlement):
         ax.contour(freqs, amps / 1e3, settlement.T, levels=[l_slip], colors="red", linewidths=2)
