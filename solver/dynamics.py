@@ -224,8 +224,7 @@ class Elastodynamics:
         self.u.x.scatter_forward()
         v_new, a_new = self.scheme.update(self.u.x.array, u_old, self.v.x.array, self.a.x.array, dt)
         self.v.x.array[:], self.a.x.array[:] = v_new, a_new
-        if self.contact is not None and self.scheme.alpha_f:
-            self.contact.update(self.u)
+        if self.contact is not None and self.scheme.alpha_f:  # the solver left the contact updated at u_{n+1}
             r = self.contact.residual()
             r.copy(self._r_contact_old)
             r.destroy()
@@ -267,6 +266,34 @@ class CsvWriter:
 
 
 Observer = Callable[[Elastodynamics], dict[str, float]]
+
+
+class Settlement:
+    """Settlement of the TP on the MP [mm], positive downward (an observer for ``run``).
+
+    s = mean_k u_z(MP, p_k) - mean_k u_z(TP, q_k), with q_k the points of the TP's lower
+    edge on its mid-wall circle (height z_e = joint.tp_offset, radius halfway between
+    the TP's inner and outer surface) and p_k the points of the MP's mid-wall circle at
+    the same height z_e, both at ``n_points`` equally spaced angles, in the reference
+    configuration. So s is the axial slide of the TP's lower edge relative to the MP
+    wall next to it (rigid motions of the whole joint give s = 0); s > 0: the TP went down.
+    """
+
+    def __init__(self, u: fem.Function, joint, n_points: int = 16):
+        from solver.probes import PointProbe
+
+        z_e = joint.tp_offset
+        r_tp = 0.5 * (float(joint.tp.inner_radius(0.0)) + float(joint.tp.outer_radius(0.0)))
+        r_mp = 0.5 * (float(joint.mp.inner_radius(z_e)) + float(joint.mp.outer_radius(z_e)))
+        angles = 2 * np.pi * np.arange(n_points) / n_points
+        ring = np.column_stack([np.cos(angles), np.sin(angles), np.zeros(n_points)])
+        lift = np.array([0.0, 0.0, z_e])
+        self._tp = PointProbe(u, r_tp * ring + lift)
+        self._mp = PointProbe(u, r_mp * ring + lift)
+
+    def __call__(self, problem: Elastodynamics | None = None) -> dict[str, float]:
+        s = self._mp()[:, 2].mean() - self._tp()[:, 2].mean()
+        return {"settlement_mm": 1e3 * float(s)}
 
 
 def run(problem: Elastodynamics, t_end: float, dt: float, dt_min: float | None = None,

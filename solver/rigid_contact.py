@@ -103,7 +103,7 @@ class RigidPlaneContact:
 
         gap = ufl.dot(x + u - p0, ufl.as_vector(n_o))
         P_n = s_n(u) + gamma * gap
-        pressure = -ufl.min_value(P_n, 0.0)
+        pressure = -ufl.conditional(ufl.le(P_n, 0.0), P_n, 0.0)  # the kink P_n = 0 counts as active
         F = (-theta / gamma * s_n(u) * s_n(w) - pressure / gamma * (theta * s_n(w) - gamma * ufl.dot(w, n))) * ds
         slip = tangential(u - u_old)
         scale = float(material.E) * 1e-14  # regularisation of |.| at zero [Pa]
