@@ -277,9 +277,11 @@ class Settlement:
     the same height z_e, both at ``n_points`` equally spaced angles, in the reference
     configuration. So s is the axial slide of the TP's lower edge relative to the MP
     wall next to it (rigid motions of the whole joint give s = 0); s > 0: the TP went down.
+    ``cell_tags`` (MP_VOLUME, TP_VOLUME) keep each probe in its own part.
     """
 
-    def __init__(self, u: fem.Function, joint, n_points: int = 16):
+    def __init__(self, u: fem.Function, joint, cell_tags, n_points: int = 16):
+        from geometry import tags
         from solver.probes import PointProbe
 
         z_e = joint.tp_offset
@@ -288,8 +290,8 @@ class Settlement:
         angles = 2 * np.pi * np.arange(n_points) / n_points
         ring = np.column_stack([np.cos(angles), np.sin(angles), np.zeros(n_points)])
         lift = np.array([0.0, 0.0, z_e])
-        self._tp = PointProbe(u, r_tp * ring + lift)
-        self._mp = PointProbe(u, r_mp * ring + lift)
+        self._tp = PointProbe(u, r_tp * ring + lift, cells=cell_tags.find(tags.TP_VOLUME))
+        self._mp = PointProbe(u, r_mp * ring + lift, cells=cell_tags.find(tags.MP_VOLUME))
 
     def __call__(self, problem: Elastodynamics | None = None) -> dict[str, float]:
         s = self._mp()[:, 2].mean() - self._tp()[:, 2].mean()

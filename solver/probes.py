@@ -15,15 +15,21 @@ from dolfinx import fem
 
 
 class PointLocator:
-    """Owning rank, cell and reference coordinates of a fixed set of points."""
+    """Owning rank, cell and reference coordinates of a fixed set of points.
 
-    def __init__(self, mesh: dolfinx.mesh.Mesh, points: npt.ArrayLike, padding: float = 1e-8):
+    ``cells`` (local indices) restricts the search, e.g. to one body of a mesh with two:
+    the search tests convex hulls of the cells' nodes, which for curved cells reach
+    beyond the cell and may claim points of a body close by.
+    """
+
+    def __init__(self, mesh: dolfinx.mesh.Mesh, points: npt.ArrayLike, padding: float = 1e-8,
+                 cells: npt.NDArray[np.int32] | None = None):
         points = np.asarray(points, dtype=np.float64).reshape(-1, 3)
         self.mesh = mesh
         self.num_points = points.shape[0]
         comm = mesh.comm
         sent = points[:, : mesh.geometry.dim] if comm.rank == 0 else np.zeros((0, mesh.geometry.dim))
-        data = dolfinx.geometry.determine_point_ownership(mesh, np.ascontiguousarray(sent), padding)
+        data = dolfinx.geometry.determine_point_ownership(mesh, np.ascontiguousarray(sent), padding, cells)
         found = comm.bcast(data.src_owner if comm.rank == 0 else None, root=0)
         if np.any(np.asarray(found) < 0):
             missing = points[np.asarray(found) < 0]
@@ -60,9 +66,9 @@ class PointLocator:
 class PointProbe:
     """Values of a Function at fixed points, identical on every rank."""
 
-    def __init__(self, u: fem.Function, points: npt.ArrayLike):
+    def __init__(self, u: fem.Function, points: npt.ArrayLike, cells: npt.NDArray[np.int32] | None = None):
         self.u = u
-        self.locator = PointLocator(u.function_space.mesh, points)
+        self.locator = PointLocator(u.function_space.mesh, points, cells=cells)
 
     def __call__(self) -> np.ndarray:
         """u at the points, shape (num_points, value_size)."""

@@ -1,0 +1,93 @@
+"""Time loop: step cutting and recovery, the minimum-step error, CSV history; settlement definition."""
+
+import csv
+import types
+
+import numpy as np
+import pytest
+import ufl
+from mpi4py import MPI
+
+from dolfinx import fem
+
+from geometry import tags
+from geometry.mesh import create_joint_mesh
+from geometry.parameters import JointGeometry, MeshOptions, load_geometry
+from solver.case import resolve_case_path
+from solver.dynamics import Settlement, StepResult, run
+
+pytestmark = pytest.mark.mpi
+
+
+class FlakyProblem:
+    """Stand-in for Elastodynamics whose Newton fails for steps longer than max_ok [s] near t_hard."""
+
+    def __init__(self, t_hard: float, max_ok: float):
+        self.t, self.t_hard, self.max_ok = 0.0, t_hard, max_ok
+        self.V = types.SimpleNamespace(mesh=types.SimpleNamespace(comm=MPI.COMM_WORLD))
+        self.attempts = []
+
+    def step(self, dt: float) -> StepResult:
+        self.attempts.append(dt)
+        if self.t <= self.t_hard < self.t + dt and dt > self.max_ok:
+            return StepResult(False, 30, [1.0, 2.0], "no convergence (test)")
+        self.t += dt
+        return StepResult(True, 2, [1.0, 1e-12])
+
+
+def test_step_is_cut_and_regrown(tmp_path):
+    problem = FlakyProblem(t_hard=0.35, max_ok=0.03)
+    comm = MPI.COMM_WORLD
+    path = comm.bcast(tmp_path / "history.csv" if comm.rank == 0 else None)  # written by rank 0
+    rows = run(problem, 1.0, 0.1, observers=[lambda p: {"settlement_mm": 10 * p.t}], csv_path=path,
+               progress=False)
+    steps = [r["dt_s"] for r in rows]
+    assert sum(steps) == pytest.approx(1.0)
+    assert min(steps) == pytest.approx(0.025)  # 0.1 -> 0.05 -> 0.025 <= 0.03
+    assert max(steps[-3:]) == pytest.approx(0.1)  # grown back to dt
+    if comm.rank > 0:
+        return
+    with open(path) as f:
+        table = list(csv.reader(f))
+    assert table[0] == ["time_s", "dt_s", "newton_iterations", "settlement_mm"]
+    assert len(table) == len(rows) + 1 and float(table[-1][0]) == pytest.approx(1.0)
+
+
+def test_minimum_step_gives_a_clear_error():
+    problem = FlakyProblem(t_hard=0.35, max_ok=1e-9)
+    with pytest.raises(RuntimeError, match=r"t = 0.3375 s even with dt = 0.0125 s \(minimum step 0.01 s\): no convergence \(test\)"):
+        run(problem, 1.0, 0.1, dt_min=0.01, progress=False)
+
+
+@pytest.mark.parametrize("kwargs", [dict(t_end=-1.0, dt=0.1), dict(t_end=1.0, dt=0.0),
+                                    dict(t_end=1.0, dt=0.1, dt_min=0.2)])
+def test_bad_run_arguments_raise(kwargs):
+    with pytest.raises(ValueError):
+        run(FlakyProblem(2.0, 1.0), progress=False, **kwargs)
+
+
+@pytest.fixture(scope="module")
+def joint_space():
+    joint, _, _ = load_geometry(resolve_case_path("scaled"))
+    data = create_joint_mesh(MPI.COMM_WORLD, joint, MeshOptions(n_circumferential=8, axial_size=0.5))
+    V = fem.functionspace(data.mesh, ("Lagrange", 2, (3,)))
+    return joint, V, data.cell_tags
+
+
+def test_settlement_definition(joint_space):
+    joint, V, cell_tags = joint_space
+    u = fem.Function(V)
+    settlement = Settlement(u, joint, cell_tags)
+    u.interpolate(lambda x: np.vstack([0.001 * x[1], -0.002 + 0 * x[0], 0.003 + 0 * x[0]]))  # rigid-ish motion
+    assert settlement()["settlement_mm"] == pytest.approx(0.0, abs=1e-12)
+    mesh = V.mesh
+    chi = fem.Function(fem.functionspace(mesh, ("DG", 0)))  # 1 on the TP
+    tp_cells = cell_tags.find(tags.TP_VOLUME)
+    chi.x.array[tp_cells[tp_cells < mesh.topology.index_map(3).size_local]] = 1.0
+    chi.x.scatter_forward()
+    u.interpolate(fem.Expression(ufl.as_vector([0.0, 0.0, -0.004 * chi]), V.element.interpolation_points))
+    assert settlement()["settlement_mm"] == pytest.approx(4.0, rel=1e-12)
+    # MP compressed axially by 1 mm at the TP edge height: the TP edge moves with it -> no settlement
+    z_e = joint.tp_offset
+    u.interpolate(lambda x: np.vstack([0 * x[0], 0 * x[0], -0.001 * x[2] / z_e]))
+    assert settlement()["settlement_mm"] == pytest.approx(0.0, abs=1e-9)
