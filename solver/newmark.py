@@ -42,12 +42,12 @@ class GeneralisedAlpha:
     alpha_f: float = 0.0  #: weight of step n in the internal and external forces [-]
 
     def __post_init__(self) -> None:
-        if not 0 < self.beta <= 0.5:
-            raise ValueError(f"Newmark beta must lie in (0, 0.5], got {self.beta}")
-        if not 0 <= self.gamma <= 1:
-            raise ValueError(f"Newmark gamma must lie in [0, 1], got {self.gamma}")
-        if not 0 <= self.alpha_f < 1 or not -1 < self.alpha_m < 1:
-            raise ValueError(f"need 0 <= alpha_f < 1 and -1 < alpha_m < 1, got {self.alpha_f}, {self.alpha_m}")
+        if not 0 < self.beta <= 1:
+            raise ValueError(f"Newmark beta must lie in (0, 1], got {self.beta}")
+        if not 0.5 <= self.gamma <= 1.5:
+            raise ValueError(f"Newmark gamma must lie in [0.5, 1.5], got {self.gamma}")
+        if not 0 <= self.alpha_f < 1 or not -1 <= self.alpha_m < 1:
+            raise ValueError(f"need 0 <= alpha_f < 1 and -1 <= alpha_m < 1, got {self.alpha_f}, {self.alpha_m}")
 
     @classmethod
     def from_spectral_radius(cls, rho_inf: float) -> "GeneralisedAlpha":
