@@ -19,7 +19,7 @@ from solver.shell import joint_stiffness
 @pytest.fixture(scope="module")
 def full_scale():
     joint, material, _ = load_geometry("cases/full_scale.toml")
-    return joint, joint_stiffness(joint, material), joint.tp.mass(material)
+    return joint, joint_stiffness(joint, material, tol=1e-6), joint.tp.mass(material)
 
 
 def make_model(full_scale, friction: FrictionLaw, damping_ratio: float = 0.01) -> LumpedModel:
@@ -96,11 +96,13 @@ def test_slip_to_stick_transition_located_to_integrator_tolerance(full_scale, rt
     def slip_rate(t):
         return model.b @ state(t)[4:8]
 
-    # bracket the first zero of the slip rate on a grid, then refine
-    grid = np.linspace(1e-4, 0.5, 2001)
-    values = np.array([slip_rate(t) for t in grid])
-    k = int(np.argmax(values < 0))
-    t_exact = brentq(slip_rate, grid[k - 1], grid[k], xtol=1e-14)
+    # bracket the first zero of the slip rate by marching with a fixed step, then refine
+    dt, x, t = 1e-4, state(0.0), 0.0
+    step = expm(A * dt)
+    while model.b @ x[4:8] >= 0 or t == 0.0:
+        x, t = particular + step @ (x - particular), t + dt
+        assert t < 0.5, "no end of slip found"
+    t_exact = brentq(slip_rate, t - dt, t, xtol=1e-14)
     assert t_event == pytest.approx(t_exact, rel=20 * rtol)
     i = int(np.searchsorted(traj.t, t_event))
     assert traj.settlement[i] == pytest.approx(state(t_exact)[0], rel=20 * rtol)
@@ -162,9 +164,9 @@ def test_early_stop_only_when_the_joint_really_sticks_for_good(full_scale):
         frequency=10.0,
         harmonic_start=0.3,
     )
-    stopped = simulate(model, load, 3.0, rtol=1e-9)
-    full = simulate(model, load, 3.0, rtol=1e-9, stop_when_stuck=False)
-    assert stopped.stuck_forever and stopped.t[-1] < 2.0
+    stopped = simulate(model, load, 2.5, rtol=1e-9)
+    full = simulate(model, load, 2.5, rtol=1e-9, stop_when_stuck=False)
+    assert stopped.stuck_forever and stopped.t[-1] < 1.8
     assert len(full.events) > 5
     assert full.events[-1][0] <= stopped.t[-1]
     assert full.events[-1][2] is Mode.STICK
