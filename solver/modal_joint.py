@@ -5,7 +5,8 @@ Settings come from the ``[modal]`` table of a case file (all optional)::
     [modal]
     degree = 3           # Lagrange degree of the displacement
     n_circumferential = 24  # elements around for the modal mesh (0: use [mesh])
-    n_modes = 20         # lowest modes wanted
+    n_modes = 20         # modes wanted: the n_modes nearest to target_hz
+    target_hz = 0.0      # shift of the spectral transformation [Hz] (0: the lowest modes)
     band_height = 0.05   # bonded band at the TP lower edge [m]
     gamma0 = 100.0       # Nitsche parameter of the tie [-]
     zeta = 0.01          # modal damping ratio for the resonant indicators [-]
@@ -41,6 +42,7 @@ class ModalSettings:
     degree: int = 3  #: chosen from the convergence table in docs/modal.md
     n_circumferential: int = 24  #: elements around for the modal mesh; 0: the [mesh] value
     n_modes: int = 20
+    target_hz: float = 0.0  #: [Hz]
     band_height: float = 0.05  #: [m]
     gamma0: float = 100.0  #: [-]
     zeta: float = 0.01  #: [-]
@@ -59,6 +61,8 @@ class ModalSettings:
             raise ValueError(f"band_height must be positive, got {self.band_height} m")
         if not self.gamma0 > 0:
             raise ValueError(f"gamma0 must be positive, got {self.gamma0}")
+        if not self.target_hz >= 0:
+            raise ValueError(f"target_hz must be >= 0 Hz, got {self.target_hz}")
         if not 0 < self.zeta < 1:
             raise ValueError(f"zeta must lie in (0, 1), got {self.zeta}")
         unknown = set(self.clamped) - set(CLAMPABLE)
@@ -134,7 +138,7 @@ def joint_modes(
         f"{100 * interface.tied_fraction():.1f} % of the "
         f"TP contact points tied ({t2 - t1:.1f} s)"
     )
-    options = EigenOptions(n_modes=case.modal.n_modes)
+    options = EigenOptions(n_modes=case.modal.n_modes, target_hz=case.modal.target_hz)
     result = modal_analysis(V, case.material, bcs, [interface], options)
     t3 = time.perf_counter()
     log(f"eigenproblem: {len(result.frequencies_hz)} modes ({t3 - t2:.1f} s)")

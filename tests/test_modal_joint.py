@@ -189,6 +189,7 @@ def test_joint_outputs(quick_joint, tmp_path_factory):
         "modal.n_modes=0",
         "modal.zeta=2.0",
         "modal.frequency=3",
+        "modal.target_hz=-5.0",
     ],
 )
 def test_bad_modal_settings_raise_before_computing(override):
