@@ -408,3 +408,29 @@ class NitscheContact:
         normal = comm.allreduce(float(w @ self.state.pressure), op=MPI.SUM)
         tangential = comm.allreduce(w @ self.state.tangential_traction, op=MPI.SUM)
         return normal, tangential
+
+    def write_surface(self, path) -> None:
+        """Write the slave points with their state as VTK PolyData (.vtp) for ParaView (rank 0 writes).
+
+        Point data: status (0 open, 1 stick, 2 slip), gap_m, pressure_Pa,
+        tangential_traction_Pa (vector), slip_velocity_m_s (vector), at the deformed points.
+        """
+        comm = self.V.mesh.comm
+        st = self.state
+        fields = {
+            "status": st.status.astype(np.int32),
+            "gap_m": st.gap,
+            "pressure_Pa": st.pressure,
+            "tangential_traction_Pa": st.tangential_traction,
+            "slip_velocity_m_s": st.slip_velocity,
+        }
+        points = comm.gather(st.coordinates, root=0)
+        data = {name: comm.gather(a, root=0) for name, a in fields.items()}
+        if comm.rank == 0:
+            import pyvista
+
+            cloud = pyvista.PolyData(np.concatenate(points))
+            for name, parts in data.items():
+                cloud.point_data[name] = np.concatenate(parts)
+            cloud.save(str(path))
+

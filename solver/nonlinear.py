@@ -110,7 +110,7 @@ class ContactNewtonSolver:
         self.ksp.setGMRESRestart(max(refactor_after, 1) + 5)
         self.ksp.setPCSide(PETSc.PC.Side.RIGHT)
         self.ksp.setNormType(PETSc.KSP.NormType.UNPRECONDITIONED)
-        self.ksp.setTolerances(rtol=krylov_rtol, atol=0.0, max_it=max(refactor_after, 1))
+        self.ksp.setTolerances(rtol=krylov_rtol, atol=0.0, max_it=max(refactor_after, 5))
         self.ksp.setInitialGuessNonzero(False)
         pc = self.ksp.getPC()
         pc.setType(PETSc.PC.Type.LU)

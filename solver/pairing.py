@@ -258,8 +258,8 @@ def pair(
     disp: npt.NDArray,
     candidates: int = 4,
     search_radius: float | None = None,
-    max_iterations: int = 25,
-    tol: float = 1e-12,
+    max_iterations: int = 30,
+    tol: float = 1e-14,
     previous: npt.NDArray | None = None,
 ) -> Pairing:
     """Project deformed slave points x (np, gdim) onto the deformed master surface.

@@ -1,0 +1,147 @@
+"""Cost of the Nitsche contact operations and of the contact Newton solve on the scaled joint.
+
+Prints: DOFs and slave points; wall time of pairing + state update, residual, Jacobian and
+interface_stiffness assembly; then one implicit step of the joint from rest (A = K + M /
+(beta dt^2), the Newmark effective stiffness at rest, axial load on the TP top) solved
+with a fresh LU factorisation at every Newton iteration (``refactor_after = 0``) and with
+the reused-factorisation GMRES strategy of ``solver.nonlinear``, with iterations,
+factorisations and the time per phase.
+
+    python benchmarks/contact_joint.py                  # default discretisation (48 around, 80 mm, P2)
+    mpirun -n 2 python benchmarks/contact_joint.py --n-circumferential 24 --steps 3
+"""
+
+import argparse
+import pathlib
+import sys
+import time
+
+sys.path.insert(0, str(pathlib.Path(__file__).resolve().parent.parent))
+
+from solver import backend  # noqa: E402,F401
+
+import numpy as np  # noqa: E402
+import ufl  # noqa: E402
+from mpi4py import MPI  # noqa: E402
+from petsc4py import PETSc  # noqa: E402
+
+import dolfinx  # noqa: E402
+import dolfinx.fem.petsc  # noqa: E402
+
+from geometry import tags  # noqa: E402
+from geometry.mesh import create_joint_mesh  # noqa: E402
+from geometry.parameters import MeshOptions, geometry_from_case  # noqa: E402
+from solver.case import read_case  # noqa: E402
+from solver.contact import NitscheContact  # noqa: E402
+from solver.elasticity import epsilon, sigma  # noqa: E402
+from solver.friction import FrictionLaw  # noqa: E402
+from solver.nonlinear import ContactNewtonSolver  # noqa: E402
+
+
+def timed(comm, f):
+    comm.Barrier()
+    t0 = time.perf_counter()
+    out = f()
+    comm.Barrier()
+    return out, time.perf_counter() - t0
+
+
+def main(argv=None) -> int:
+    p = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    p.add_argument("--case", default="scaled")
+    p.add_argument("--n-circumferential", type=int, default=48)
+    p.add_argument("--axial-size", type=float, default=0.08, help="[m]")
+    p.add_argument("--degree", type=int, default=2)
+    p.add_argument("--gamma0", type=float, default=10.0)
+    p.add_argument("--theta", type=int, default=1)
+    p.add_argument("--force", type=float, default=10e3, help="axial load on the TP top [N]")
+    p.add_argument("--dt", type=float, default=2e-2, help="time step of the effective stiffness [s]")
+    p.add_argument("--steps", type=int, default=4, help="load steps (force / steps each)")
+    p.add_argument("--max-backtracks", type=int, default=0, help="Newton step halvings (line search)")
+    p.add_argument("--lagged-friction", action="store_true")
+    p.add_argument("--strategies", nargs="+", default=["fresh", "reuse"], choices=["fresh", "reuse"],
+                   help="fresh: LU at every Newton iteration; reuse: reused LU + GMRES")
+    a = p.parse_args(argv)
+    comm = MPI.COMM_WORLD
+    say = print if comm.rank == 0 else (lambda *args, **kw: None)
+
+    case = read_case(a.case)
+    joint, material, _ = geometry_from_case(case)
+    options = MeshOptions(n_circumferential=a.n_circumferential, axial_size=a.axial_size)
+    data, t = timed(comm, lambda: create_joint_mesh(comm, joint, options))
+    mesh, facet_tags = data.mesh, data.facet_tags
+    V = dolfinx.fem.functionspace(mesh, ("Lagrange", a.degree, (3,)))
+    say(f"mesh: {a.n_circumferential} around, {a.axial_size} m, P{a.degree}: "
+        f"{V.dofmap.index_map.size_global * 3} dofs, {comm.size} rank(s), built in {t:.1f} s")
+
+    friction = FrictionLaw()  # SPEC 4 reference: mu_s = 0.5, mu_d = 0.4, d_c = 100 s/m
+    contact, t = timed(comm, lambda: NitscheContact(
+        V, facet_tags, tags.TP_CONTACT, tags.MP_CONTACT, material, friction, gamma0=a.gamma0, theta=a.theta,
+        lagged_friction=a.lagged_friction))
+    n_points = comm.allreduce(contact.slave.num_points, op=MPI.SUM)
+    say(f"contact set-up: {t:.2f} s; {n_points} slave points, {contact.master.num_facets} master facets")
+    u = dolfinx.fem.Function(V)
+    for name, f in [
+        ("pairing + state update", lambda: contact.update(u)),
+        ("residual", contact.residual),
+        ("jacobian", contact.jacobian),
+        ("interface_stiffness(band 0.1 m)", lambda: contact.interface_stiffness(contact.band_status(0.1))),
+    ]:
+        _, t = timed(comm, f)
+        say(f"  {name:34s} {t:7.2f} s")
+
+    # implicit step from rest: A = K + M / (beta dt^2), beta = 1/4
+    du, v = ufl.TrialFunction(V), ufl.TestFunction(V)
+    c_m = 1.0 / (0.25 * a.dt**2)
+    form = dolfinx.fem.form(ufl.inner(sigma(du, material), epsilon(v)) * ufl.dx
+                            + c_m * material.rho * ufl.inner(du, v) * ufl.dx)
+    clamped = dolfinx.fem.locate_dofs_topological(V, 2, facet_tags.find(tags.MP_CLAMPED))
+    bcs = [dolfinx.fem.dirichletbc(np.zeros(3), clamped, V)]
+    A = dolfinx.fem.petsc.assemble_matrix(form, bcs=bcs)
+    A.assemble()
+    ds = ufl.Measure("ds", domain=mesh, subdomain_data=facet_tags)
+    area = comm.allreduce(dolfinx.fem.assemble_scalar(dolfinx.fem.form(1.0 * ds(tags.TP_TOP))), op=MPI.SUM)
+    load = dolfinx.fem.Constant(mesh, np.zeros(3))
+    L = dolfinx.fem.form(ufl.inner(load, v) * ds(tags.TP_TOP))
+
+    strategies = {"fresh": ("LU every iteration", 0), "reuse": ("reused LU + GMRES", 25)}
+    for label, refactor in (strategies[name] for name in a.strategies):
+        u.x.array[:] = 0.0
+        u_old = dolfinx.fem.Function(V)
+        newton = ContactNewtonSolver(A, bcs, refactor_after=refactor, max_iterations=40, max_backtracks=a.max_backtracks)
+        total = {}
+        t_all = 0.0
+        say(f"{label}:")
+        for k in range(1, a.steps + 1):
+            load.value = np.array([0.0, 0.0, -a.force * k / a.steps / area])
+            b = dolfinx.fem.petsc.assemble_vector(L)
+            dolfinx.fem.petsc.apply_lifting(b, [form], [bcs])
+            b.ghostUpdate(PETSc.InsertMode.ADD, PETSc.ScatterMode.REVERSE)
+            dolfinx.fem.petsc.set_bc(b, bcs)
+            # b += M/(beta dt^2) u_old (the step's inertia term at rest velocity/acceleration)
+            Mu = A.createVecLeft()
+            A.mult(u_old.x.petsc_vec, Mu)
+            b.axpy(1.0, Mu)
+            K_only = dolfinx.fem.petsc.assemble_vector(dolfinx.fem.form(
+                ufl.inner(sigma(u_old, material), epsilon(v)) * ufl.dx))
+            K_only.ghostUpdate(PETSc.InsertMode.ADD, PETSc.ScatterMode.REVERSE)
+            b.axpy(-1.0, K_only)
+            dolfinx.fem.petsc.set_bc(b, bcs)
+            contact.set_reference(u_old, a.dt)
+            result, t = timed(comm, lambda: newton.solve(b, contact, u))
+            t_all += t
+            for key, value in result.timings.items():
+                total[key] = total.get(key, 0.0) + value
+            status = np.bincount(np.concatenate(comm.allgather(contact.state.status)), minlength=3)
+            say(f"  step {k}: converged={result.converged} iterations={result.iterations} "
+                f"factorisations={result.factorizations} GMRES={sum(result.linear_iterations)} "
+                f"time={t:.1f} s  open/stick/slip={status.tolist()}  "
+                f"||F||: {' '.join(f'{x:.1e}' for x in result.residual_norms)} {result.message}")
+            u_old.x.array[:] = u.x.array
+        say(f"  total {t_all:.1f} s; " + ", ".join(f"{key} {value:.1f} s" for key, value in total.items()))
+        newton.destroy()
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())
