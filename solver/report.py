@@ -1,0 +1,224 @@
+"""Outputs of an installation run: history and stage tables, events, plots, ParaView, summary.
+
+Files (in the output folder; CSV headers carry units):
+
+* ``history.csv``: one row per accepted time step (``HISTORY_COLUMNS``);
+* ``stages.csv``: one row per stage (settlement gained, stick-slip events, ...);
+* ``frequencies.csv``: the excitation stages and the reason for each;
+* ``settlement.png`` (settlement and excitation frequency against time),
+  ``stage_gain.png`` (settlement gained per stage against frequency),
+  ``contact_status_<k>.png`` (contact status unwrapped in angle and z after stage k);
+* ``displacement_<k>.bp`` (VTX) and ``contact_<k>.vtp`` (slave points with status,
+  pressure, slip velocity) after stage k;
+* ``summary.txt``: the one-screen summary printed at the end.
+
+Stick-slip events: the TP slips as a whole while its settlement rate, averaged over one
+excitation period in vibration stages (one step otherwise), exceeds ``slip_rate_mm_s``;
+an event is a transition from below to above that rate.
+"""
+
+import csv
+import os
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+from mpi4py import MPI
+
+from solver.contact import NitscheContact, Status
+
+HISTORY_COLUMNS = ["time_s", "dt_s", "stage", "frequency_Hz", "amplitude_N", "axial_force_N", "settlement_mm",
+                   "newton_iterations", "stick_fraction", "slip_fraction", "normal_force_N"]
+STAGE_COLUMNS = ["stage", "name", "start_s", "end_s", "dt_s", "frequency_Hz", "amplitude_N", "steps",
+                 "settlement_start_mm", "settlement_end_mm", "gained_mm", "stick_slip_events",
+                 "newton_iterations_mean", "newton_iterations_max", "wall_s", "reason"]
+
+
+def _fmt(v: Any) -> str:
+    return f"{v:.10g}" if isinstance(v, float) else str(v)
+
+
+class HistoryWriter:
+    """``history.csv`` written per row (rank 0), starting with ``rows`` already known (resume)."""
+
+    def __init__(self, path: Path, comm: MPI.Comm, rows: list[dict[str, float]] = ()):
+        self._file = None
+        if comm.rank == 0:
+            path.parent.mkdir(parents=True, exist_ok=True)
+            self._file = open(path, "w", newline="")
+            self._writer = csv.writer(self._file)
+            self._writer.writerow(HISTORY_COLUMNS)
+            for row in rows:
+                self.write(row)
+
+    def write(self, row: dict[str, float]) -> None:
+        if self._file is not None:
+            self._writer.writerow([_fmt(row[c]) for c in HISTORY_COLUMNS])
+            self._file.flush()
+
+    def close(self) -> None:
+        if self._file is not None:
+            self._file.close()
+            self._file = None
+
+
+def stick_slip_events(time_s: np.ndarray, settlement_mm: np.ndarray, s0_mm: float, t0_s: float,
+                      window: int, slip_rate_mm_s: float) -> int:
+    """Transitions stick -> slip of the TP as a whole (see the module docstring)."""
+    t = np.concatenate([[t0_s], time_s])
+    s = np.concatenate([[s0_mm], settlement_mm])
+    if len(t) <= window:
+        return 0
+    rate = (s[window:] - s[:-window]) / (t[window:] - t[:-window])
+    slipping = np.concatenate([[False], rate > slip_rate_mm_s])
+    return int(np.count_nonzero(slipping[1:] & ~slipping[:-1]))
+
+
+def stage_summary(index: int, plan, rows: list[dict], history: list[dict], slip_rate_mm_s: float) -> dict[str, Any]:
+    """Summary of stage ``index`` from its history rows."""
+    before = [r for r in history if r["stage"] < index]
+    s0 = before[-1]["settlement_mm"] if before else 0.0
+    t0 = before[-1]["time_s"] if before else plan.start_s
+    t = np.array([r["time_s"] for r in rows])
+    s = np.array([r["settlement_mm"] for r in rows])
+    its = np.array([r["newton_iterations"] for r in rows]) if rows else np.zeros(1)
+    window = max(1, round(1.0 / (plan.frequency_Hz * plan.dt_s))) if plan.frequency_Hz > 0 else 1
+    return {"stage": index, "name": plan.name, "start_s": plan.start_s, "end_s": plan.end_s, "dt_s": plan.dt_s,
+            "frequency_Hz": plan.frequency_Hz, "amplitude_N": plan.amplitude_N, "steps": len(rows),
+            "settlement_start_mm": s0, "settlement_end_mm": float(s[-1]) if len(s) else s0,
+            "gained_mm": (float(s[-1]) if len(s) else s0) - s0,
+            "stick_slip_events": stick_slip_events(t, s, s0, t0, window, slip_rate_mm_s),
+            "newton_iterations_mean": float(its.mean()), "newton_iterations_max": int(its.max()),
+            "reason": plan.reason}
+
+
+def write_table(rows: list[dict], columns: list[str], path: Path, comm: MPI.Comm) -> None:
+    if comm.rank == 0:
+        path.parent.mkdir(parents=True, exist_ok=True)
+        with open(path, "w", newline="") as f:
+            w = csv.writer(f)
+            w.writerow(columns)
+            for r in rows:
+                w.writerow([_fmt(r[c]) for c in columns])
+
+
+def write_stage_table(stages: list[dict], path: Path, comm: MPI.Comm) -> None:
+    write_table(stages, STAGE_COLUMNS, path, comm)
+
+
+def write_choice(excitations, path: Path, comm: MPI.Comm) -> None:
+    """``frequencies.csv``: frequency_Hz, amplitude_N, role, mode, m, n, rank, reason."""
+    from dataclasses import asdict
+
+    rows = [asdict(e) for e in excitations]
+    write_table(rows, ["frequency_Hz", "amplitude_N", "role", "mode", "m", "n", "rank", "reason"], path, comm)
+
+
+def format_stage(s: dict) -> str:
+    f = f"{s['frequency_Hz']:7.2f} Hz" if s["frequency_Hz"] else "   static "
+    return (f"{s['name']:>12}: {f}, {s['steps']:5d} steps, settlement {s['settlement_end_mm']:8.4f} mm "
+            f"(+{s['gained_mm']:.4f} mm), {s['stick_slip_events']} stick-slip event(s), "
+            f"Newton {s['newton_iterations_mean']:.2f}/step")
+
+
+def contact_counts(contact: NitscheContact) -> dict[str, float]:
+    """Fractions of the slave points open / stick / slip (all ranks)."""
+    comm = contact.V.mesh.comm
+    st = contact.state.status
+    counts = comm.allreduce(np.array([np.count_nonzero(st == s) for s in Status]), op=MPI.SUM)
+    return {f"{s.name.lower()}_fraction": float(c / max(counts.sum(), 1)) for s, c in zip(Status, counts)}
+
+
+def summary(stages: list[dict], contact: NitscheContact, history: list[dict]) -> dict[str, Any]:
+    normal, friction = contact.forces()
+    return {"total_settlement_mm": history[-1]["settlement_mm"] if history else 0.0,
+            "stick_slip_events": int(sum(s["stick_slip_events"] for s in stages)),
+            "steps": len(history), "end_time_s": history[-1]["time_s"] if history else 0.0,
+            "normal_force_N": normal, "friction_force_z_N": float(friction[2]), **contact_counts(contact)}
+
+
+def format_summary(summary: dict, stages: list[dict], excitations) -> str:
+    lines = ["", "=" * 78, "installation summary", "-" * 78]
+    lines += [format_stage(s) for s in stages]
+    lines += ["-" * 78,
+              f"total settlement {summary['total_settlement_mm']:.4f} mm after {summary['end_time_s']:.4g} s "
+              f"({summary['steps']} steps), {summary['stick_slip_events']} stick-slip event(s)",
+              f"final contact: {100 * summary['stick_fraction']:.1f} % stick, {100 * summary['slip_fraction']:.1f} % slip, "
+              f"{100 * summary['open_fraction']:.1f} % open of the TP contact points; normal force "
+              f"{summary['normal_force_N'] / 1e3:.2f} kN, axial friction {summary['friction_force_z_N'] / 1e3:.2f} kN",
+              "excitation frequencies: " + ", ".join(f"{e.frequency_Hz:.1f} Hz ({e.role})" for e in excitations),
+              "=" * 78]
+    return "\n".join(lines)
+
+
+def write_summary(summary: dict, stages, excitations, path: Path, comm: MPI.Comm) -> None:
+    if comm.rank == 0:
+        path.write_text(format_summary(summary, stages, excitations) + "\n")
+
+
+def write_state(model, folder: Path, name: str, k: int) -> None:
+    """Displacement (VTX, time = simulated time) and contact points (.vtp) after stage k (collective)."""
+    from dolfinx import io
+
+    u = model.problem.u
+    with io.VTXWriter(model.comm, folder / f"displacement_{k}.bp", [u], engine="BP4") as writer:
+        writer.write(model.problem.t)
+    model.contact.write_surface(folder / f"contact_{k}.vtp")
+
+
+def plot_contact_status(contact: NitscheContact, joint, path: Path, title: str) -> None:
+    """Contact status of the slave points unwrapped: angle [deg] against height above the TP's lower end [mm]."""
+    comm = contact.V.mesh.comm
+    st = contact.state
+    x = comm.gather(contact.slave.points, root=0)
+    status = comm.gather(st.status, root=0)
+    if comm.rank != 0:
+        return
+    os.environ.setdefault("MPLBACKEND", "Agg")
+    import matplotlib.pyplot as plt
+
+    x, status = np.concatenate(x), np.concatenate(status)
+    theta = np.degrees(np.arctan2(x[:, 1], x[:, 0])) % 360
+    z = 1e3 * (x[:, 2] - joint.tp_offset)
+    fig, ax = plt.subplots(figsize=(8, 4))
+    for s, colour in ((Status.OPEN, "lightgrey"), (Status.STICK, "tab:blue"), (Status.SLIP, "tab:red")):
+        sel = status == s
+        ax.scatter(theta[sel], z[sel], s=4, c=colour, label=f"{s.name.lower()} ({np.count_nonzero(sel)})")
+    ax.set_xlabel("angle [deg]")
+    ax.set_ylabel("height above the TP lower end [mm]")
+    ax.set_title(f"contact status {title}")
+    ax.legend(loc="upper right", markerscale=3)
+    fig.tight_layout()
+    fig.savefig(path, dpi=120)
+    plt.close(fig)
+
+
+def plot_history(history: list[dict], stages: list[dict], folder: Path, comm: MPI.Comm) -> None:
+    """settlement.png and stage_gain.png (rank 0)."""
+    if comm.rank != 0 or not history:
+        return
+    os.environ.setdefault("MPLBACKEND", "Agg")
+    import matplotlib.pyplot as plt
+
+    t = np.array([r["time_s"] for r in history])
+    fig, ax = plt.subplots(figsize=(9, 4))
+    ax.plot(t, [r["settlement_mm"] for r in history], "k-", lw=1)
+    ax.set_xlabel("time [s]")
+    ax.set_ylabel("settlement [mm]")
+    ax2 = ax.twinx()
+    ax2.plot(t, [r["frequency_Hz"] for r in history], "tab:orange", lw=1)
+    ax2.set_ylabel("excitation frequency [Hz]", color="tab:orange")
+    fig.tight_layout()
+    fig.savefig(folder / "settlement.png", dpi=120)
+    plt.close(fig)
+    vib = [s for s in stages if s["frequency_Hz"] > 0]
+    fig, ax = plt.subplots(figsize=(6, 4))
+    if vib:
+        ax.bar([s["frequency_Hz"] for s in vib], [1e3 * s["gained_mm"] for s in vib], width=3.0)
+        for s in vib:
+            ax.annotate(s["name"].split()[-1], (s["frequency_Hz"], 1e3 * s["gained_mm"]), ha="center", va="bottom")
+    ax.set_xlabel("excitation frequency [Hz]")
+    ax.set_ylabel("settlement gained in the stage [um]")
+    fig.tight_layout()
+    fig.savefig(folder / "stage_gain.png", dpi=120)
+    plt.close(fig)

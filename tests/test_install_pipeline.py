@@ -1,0 +1,98 @@
+"""Installation pipeline on a tiny joint: outputs with units, positive self-weight settlement,
+and a killed-and-resumed run that ends with the results of an uninterrupted one (1e-8).
+
+The tiny configuration (12 around, 0.2 m axially, degree 2, a 0.05 s self-weight ramp and
+two short vibration stages) says nothing about convergence; it exercises every stage.
+"""
+
+import csv
+from pathlib import Path
+
+import numpy as np
+import pytest
+from mpi4py import MPI
+
+from solver.case import read_case
+from solver.installation import Installation, InstallationCase
+
+pytestmark = pytest.mark.mpi
+
+TINY = ["mesh.n_circumferential=12", "mesh.axial_size=0.2", "self_weight.ramp_time_s=0.04",
+        "self_weight.hold_s=0.01", "self_weight.dt_s=0.005", "vibration.n_modes=4",
+        "vibration.n_frequencies=1", "vibration.lead_in_hz=[]", "vibration.stage_duration_s=0.004",
+        "vibration.control=true", "time.steps_per_period=8", "output.checkpoint_every=4",
+        "output.plots=false"]
+
+
+def _shared_dir(factory, name: str) -> Path:
+    comm = MPI.COMM_WORLD
+    return Path(comm.bcast(str(factory.mktemp(name)) if comm.rank == 0 else None, root=0))
+
+
+@pytest.fixture(scope="module")
+def uninterrupted(tmp_path_factory):
+    out = _shared_dir(tmp_path_factory, "install_full")
+    case = InstallationCase.from_dict(read_case("scaled", TINY))
+    runner = Installation(MPI.COMM_WORLD, case, out, progress=False)
+    summary = runner.run()
+    return runner, summary, out
+
+
+def _read_csv(path: Path) -> tuple[list[str], list[dict[str, str]]]:
+    with open(path, newline="") as f:
+        rows = list(csv.DictReader(f))
+    with open(path, newline="") as f:
+        header = next(csv.reader(f))
+    return header, rows
+
+
+def test_pipeline_settles_and_writes_outputs(uninterrupted):
+    runner, summary, out = uninterrupted
+    stages = runner.stages
+    assert stages[0]["name"] == "self-weight"
+    print(f"\nself-weight settlement {stages[0]['gained_mm']:.4f} mm; stages "
+          + ", ".join(f"{s['name']} {s['frequency_Hz']:.1f} Hz +{s['gained_mm']:.2e} mm" for s in stages[1:]))
+    assert stages[0]["gained_mm"] > 0  # 10 kN down: the TP slides down
+    assert [e.role for e in runner.excitations].count("control") == 1
+    assert len(stages) == 1 + len(runner.excitations)
+    assert summary["total_settlement_mm"] == pytest.approx(stages[-1]["settlement_end_mm"])
+    comm = MPI.COMM_WORLD
+    if comm.rank == 0:
+        header, rows = _read_csv(out / "history.csv")
+        for column in ("time_s", "settlement_mm", "frequency_Hz", "amplitude_N", "newton_iterations"):
+            assert column in header
+        assert len(rows) == summary["steps"] == len(runner.history)
+        assert float(rows[-1]["settlement_mm"]) == pytest.approx(summary["total_settlement_mm"], rel=1e-9)
+        header, rows = _read_csv(out / "stages.csv")
+        assert {"gained_mm", "settlement_end_mm", "stick_slip_events", "frequency_Hz"} <= set(header)
+        assert len(rows) == len(stages)
+        header, rows = _read_csv(out / "frequencies.csv")
+        assert "frequency_Hz" in header and all(r["reason"] for r in rows)
+        header, _ = _read_csv(out / "modes.csv")
+        assert "frequency_Hz" in header
+        for k in range(1, len(stages) + 1):
+            assert (out / f"contact_{k}.vtp").is_file() and (out / f"displacement_{k}.bp").is_dir()
+        assert "total settlement" in (out / "summary.txt").read_text()
+
+
+def test_resume_equals_uninterrupted(uninterrupted, tmp_path_factory):
+    runner, summary, _ = uninterrupted
+    out = _shared_dir(tmp_path_factory, "install_resumed")
+    case = InstallationCase.from_dict(read_case("scaled", TINY))
+    killed = Installation(MPI.COMM_WORLD, case, out, progress=False)
+    assert killed.run(stop_after_checkpoints=3) == {}  # stops mid-run after its 3rd checkpoint
+    resumed = Installation(MPI.COMM_WORLD, case, out, progress=False)
+    again = resumed.run(resume=True)
+    u_ref, u = runner.model.problem.u.x.petsc_vec, resumed.model.problem.u.x.petsc_vec
+    difference = u.copy()
+    difference.axpy(-1.0, u_ref)
+    relative = difference.norm() / u_ref.norm()
+    s_ref = np.array([r["settlement_mm"] for r in runner.history])
+    s = np.array([r["settlement_mm"] for r in resumed.history])
+    print(f"\nresume: |u - u_ref| / |u_ref| = {relative:.2e}, history rows {len(s)} vs {len(s_ref)}, "
+          f"final settlement {again['total_settlement_mm']:.10f} vs {summary['total_settlement_mm']:.10f} mm")
+    assert len(s) == len(s_ref)
+    assert relative < 1e-8
+    assert np.allclose(s, s_ref, rtol=1e-8, atol=1e-8 * np.abs(s_ref).max())
+    assert again["total_settlement_mm"] == pytest.approx(summary["total_settlement_mm"], rel=1e-8)
+    assert [round(e.frequency_Hz, 9) for e in resumed.excitations] == [round(e.frequency_Hz, 9) for e in runner.excitations]
