@@ -169,7 +169,7 @@ def solve_eigenproblem(
         "st_ksp_type": "preonly",
         "st_pc_type": "cholesky",
         "st_pc_factor_mat_solver_type": "mumps",
-        "st_mat_mumps_icntl_13": 1,  # serial root Schur: correct inertia in parallel
+        "st_mat_mumps_icntl_13": 1,  # no ScaLAPACK root front: inertia (band) in parallel
         "st_mat_mumps_icntl_24": 1,  # null-pivot detection
     }
     for key, value in settings.items():
