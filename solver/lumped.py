@@ -128,15 +128,19 @@ class LumpedModel:
         """dxi/dq."""
         return np.array([math.cos(self.alpha), math.sin(self.alpha), self.lever, -1.0])
 
+    @property
+    def stick_basis(self) -> npt.NDArray[np.float64]:
+        """Z with q = Z r + const in stick: r = (v, u, theta), w = b[:3] . r - xi (xi fixed)."""
+        return np.vstack([np.eye(3), self.b[:3]])
+
     def stick_stiffness(self) -> npt.NDArray[np.float64]:
-        """Stiffness matrix of the sticking, closed contact (constraint xi fixed eliminates w)."""
-        K = np.diag(self.stiffness) + self.springs.K_N * np.outer(self.a, self.a)
-        Z = np.vstack([np.eye(3), self.b[:3]])  # q = Z r, w = b[:3] . r (xi = 0)
-        return Z.T @ K @ Z
+        """Stiffness matrix Z^T K Z of the sticking, closed contact."""
+        Z = self.stick_basis
+        return Z.T @ (np.diag(self.stiffness) + self.springs.K_N * np.outer(self.a, self.a)) @ Z
 
     def stick_frequencies(self) -> npt.NDArray[np.float64]:
         """Natural frequencies [Hz] of the closed, sticking joint (undamped, ascending)."""
-        Z = np.vstack([np.eye(3), self.b[:3]])
+        Z = self.stick_basis
         w2 = eigh(self.stick_stiffness(), Z.T @ np.diag(self.masses) @ Z, eigvals_only=True)
         return np.sqrt(w2) / (2 * math.pi)
 
@@ -317,11 +321,11 @@ class _Dynamics:
         Returns (Z, z0, M_r, C_r, K_r, f0) with f0 the load vector that does not
         depend on F(t); the axial force enters as F(t) e_v (first entry).
         """
-        Z = np.vstack([np.eye(3), self.b[:3]])
+        Z = self.model.stick_basis
         z0 = np.array([0.0, 0.0, 0.0, -xi0])
         Mr = Z.T @ np.diag(self.m) @ Z
         Cr = Z.T @ np.diag(self.c) @ Z
-        Kr = Z.T @ (np.diag(self.k) + self.K_N * np.outer(self.a, self.a)) @ Z
+        Kr = self.model.stick_stiffness()
         f0 = -Z.T @ (self.k * z0)
         return Z, z0, Mr, Cr, Kr, f0
 
