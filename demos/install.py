@@ -26,9 +26,14 @@ from solver.installation import Installation, InstallationCase  # noqa: E402
 
 #: --quick: coarse mesh, short stages (a smoke run of about a minute on 2 ranks)
 QUICK = ["mesh.n_circumferential=12", "mesh.axial_size=0.2",
-         "self_weight.ramp_time_s=0.05", "self_weight.hold_s=0.01", "self_weight.dt_s=0.005",
+         "self_weight.ramp_time_s=0.02", "self_weight.hold_s=0.004", "self_weight.dt_s=0.002",
          "vibration.stage_duration_s=0.01", "vibration.n_modes=6", "vibration.n_frequencies=1",
          "vibration.lead_in_hz=[100.0]", "time.steps_per_period=8", "output.checkpoint_every=20"]
+
+#: the default run (no options): a coarser mesh and shorter stages than the case file, so that it
+#: finishes in reasonable time on 2 cores (docs/install.md, "Cost"); --set overrides them
+DEFAULT = ["mesh.n_circumferential=16", "mesh.axial_size=0.1", "vibration.stage_duration_s=0.03",
+           "time.steps_per_period=16", "vibration.n_modes=20"]
 
 #: named options -> case keys
 NAMED = {"mesh_size": "mesh.axial_size", "n_circumferential": "mesh.n_circumferential", "degree": "contact.degree",
@@ -62,7 +67,9 @@ def parse(argv: list[str] | None) -> argparse.Namespace:
     p.add_argument("--stage-duration", type=float, help="duration of each vibration stage [s]")
     p.add_argument("--n-frequencies", type=int, help="number of ranked natural frequencies excited")
     p.add_argument("--steps-per-period", type=int, help="time steps per excitation period")
-    p.add_argument("--quick", action="store_true", help="coarse smoke run (about a minute on 2 ranks)")
+    p.add_argument("--quick", action="store_true", help="coarse smoke run (about a minute on 2 unloaded cores)")
+    p.add_argument("--full", action="store_true", help="the case file's discretisation and stage durations "
+                   "(without the default run's cost reductions)")
     p.add_argument("--output", default="output/install", help="output folder")
     p.add_argument("--resume", action="store_true", help="continue from the last checkpoint in --output")
     p.add_argument("--no-progress", action="store_true", help="no progress bar")
@@ -71,7 +78,7 @@ def parse(argv: list[str] | None) -> argparse.Namespace:
 
 def overrides(args: argparse.Namespace) -> list[str]:
     """The case overrides of the command line: --quick first, then named options, then --set."""
-    items = list(QUICK) if args.quick else []
+    items = ([] if args.full else list(DEFAULT)) + (list(QUICK) if args.quick else [])
     for name, key in NAMED.items():
         value = getattr(args, name)
         if value is not None:

@@ -27,6 +27,13 @@ from mpi4py import MPI
 MANIFEST = "manifest.json"
 
 
+def _plain(value: Any) -> Any:
+    """numpy scalars -> Python numbers for JSON."""
+    if isinstance(value, np.generic):
+        return value.item()
+    raise TypeError(f"cannot write {type(value).__name__} to a checkpoint manifest")
+
+
 def _rank_file(folder: Path, rank: int) -> Path:
     return folder / f"rank{rank}.npz"
 
@@ -53,7 +60,7 @@ def save(folder: str | Path, problem, record: dict[str, Any]) -> None:
     np.savez(_rank_file(tmp, comm.rank), **arrays)
     if comm.rank == 0:
         manifest = {"ranks": comm.size, "time_s": problem.t, **record}
-        (tmp / MANIFEST).write_text(json.dumps(manifest, indent=1))
+        (tmp / MANIFEST).write_text(json.dumps(manifest, indent=1, default=_plain))
     comm.barrier()
     if comm.rank == 0:
         shutil.rmtree(folder, ignore_errors=True)

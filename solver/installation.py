@@ -70,8 +70,14 @@ class ContactSettings:
     theta: int = 1  #: 1 symmetric (needed by the modal stage)
     lagged_friction: bool = False
     degree: int = 2  #: Lagrange degree of the displacement
+    max_iterations: int = 30  #: Newton iterations per step before the step is cut
+    max_backtracks: int = 6  #: Newton line-search halvings (solver.nonlinear.ContactNewtonSolver)
 
     def __post_init__(self) -> None:
+        if not (isinstance(self.max_iterations, int) and self.max_iterations >= 1):
+            raise ValueError(f"max_iterations must be an integer >= 1, got {self.max_iterations!r}")
+        if not (isinstance(self.max_backtracks, int) and self.max_backtracks >= 0):
+            raise ValueError(f"max_backtracks must be an integer >= 0, got {self.max_backtracks!r}")
         _check_choice("slave", self.slave, SURFACES)
         _check_choice("master", self.master, SURFACES)
         if self.slave == self.master:
@@ -344,7 +350,9 @@ def build_joint_model(comm: MPI.Comm, case: InstallationCase) -> JointModel:
     top = TopFaceLoad(V, mesh_data.facet_tags, tags.TP_TOP)
     problem = InstallationProblem(V, M, K, bcs, load=TPLoading(top, static_axial=static),
                                   scheme=scheme_from_name(sw.scheme or case.time.scheme, case.time.rho_inf),
-                                  damping=damping, contact=contact)
+                                  damping=damping, contact=contact,
+                                  newton_options={"max_iterations": case.contact.max_iterations,
+                                                  "max_backtracks": case.contact.max_backtracks})
     problem.initialise(0.0)
     settlement = Settlement(problem.u, case.joint, mesh_data.cell_tags)
     return JointModel(case, mesh_data, V, bcs, contact, top, static, problem, settlement, damping,
