@@ -54,6 +54,11 @@ def main(argv=None) -> int:
     p.add_argument("--rho-inf", type=float, default=0.8, help="generalised-alpha spectral radius")
     p.add_argument("--zeta", type=float, default=0.01, help="Rayleigh damping ratio at --zeta-frequency")
     p.add_argument("--zeta-frequency", type=float, default=120.0, help="[Hz]")
+    p.add_argument("--lagged-friction", action="store_true", help="mu from the previous step's slip speed")
+    p.add_argument("--backtracks", type=int, default=4, help="Newton step halvings when ||F|| grows")
+    p.add_argument("--refactor-after", type=int, default=0,
+                   help="GMRES iterations before refactorising A + J_c (0: LU every Newton iteration; "
+                        "> 0 may deadlock on several ranks, see docs/dynamics.md)")
     p.add_argument("--quick", action="store_true", help="short stages (smoke run)")
     p.add_argument("--output", default="output/dynamics_joint")
     a = p.parse_args(argv)
@@ -69,12 +74,14 @@ def main(argv=None) -> int:
     bcs = [clamp(V, data.facet_tags, [tags.MP_CLAMPED])]
     M, K = assemble_structure(V, material, bcs)
     contact = NitscheContact(V, data.facet_tags, tags.TP_CONTACT, tags.MP_CONTACT, material,
-                             FrictionLaw(*a.mu, d_c=a.d_c), gamma0=a.gamma0, theta=1)
+                             FrictionLaw(*a.mu, d_c=a.d_c), gamma0=a.gamma0, theta=1,
+                             lagged_friction=a.lagged_friction)
     harmonic = Schedule([Stage(a.forcing, a.frequency, a.amplitude)], start_s=a.ramp) if a.forcing > 0 else None
     loading = TPLoading(TopFaceLoad(V, data.facet_tags, tags.TP_TOP), static_axial=RampedAxialForce(-10e3, a.ramp),
                         schedule=harmonic)
     problem = Elastodynamics(V, M, K, bcs, load=loading, scheme=GeneralisedAlpha.from_spectral_radius(a.rho_inf),
-                             damping=RayleighDamping.at_frequency(a.zeta, a.zeta_frequency), contact=contact)
+                             damping=RayleighDamping.at_frequency(a.zeta, a.zeta_frequency), contact=contact,
+                             newton_options={"max_backtracks": a.backtracks, "refactor_after": a.refactor_after})
     problem.initialise(0.0)
     settlement = Settlement(problem.u, joint, data.cell_tags)
     dofs = V.dofmap.index_map.size_global * 3
