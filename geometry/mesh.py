@@ -54,32 +54,50 @@ class _PartEntities:
 
 
 def _add_part(part: ConePart, z0: float, options: MeshOptions) -> _PartEntities:
-    """Add one part, lower end at global height ``z0`` [m], to the current gmsh model (geo)."""
+    """Add one part, lower end at global height ``z0`` [m], to the current gmsh model (geo).
+
+    Each wall layer is its own profile surface, so every node of the mesh lies on a
+    geometric surface of revolution and second-order nodes land on exact circles
+    also inside the wall (a single surface split into layers would leave the
+    interior mid-edge nodes on chords).
+    """
     geo = gmsh.model.geo
     heights = part.profile_heights()
-    outer_pts = [geo.addPoint(float(part.outer_radius(h)), 0.0, z0 + h) for h in heights]
-    inner_pts = [geo.addPoint(float(part.inner_radius(h)), 0.0, z0 + h) for h in heights]
-    radial = [geo.addLine(i, o) for i, o in zip(inner_pts, outer_pts)]
-    for line in radial:
-        geo.mesh.setTransfiniteCurve(line, options.n_layers + 1)
+    n_layers = options.n_layers
+    # points[j][h]: layer interface j (0 = inner surface, n_layers = outer) at height h
+    points = [
+        [
+            geo.addPoint(float(part.inner_radius(h)) + j * part.thickness / n_layers, 0.0, z0 + h)
+            for h in heights
+        ]
+        for j in range(n_layers + 1)
+    ]
+    radial = [
+        [geo.addLine(points[j][k], points[j + 1][k]) for k in range(len(heights))]
+        for j in range(n_layers)
+    ]
+    for line in (line for layer in radial for line in layer):
+        geo.mesh.setTransfiniteCurve(line, 2)
 
-    profile, is_cone = [], []
+    profile, is_cone, layer_of = [], [], []
     for k in range(len(heights) - 1):
         n = options.n_axial(heights[k + 1] - heights[k]) + 1
-        outer = geo.addLine(outer_pts[k], outer_pts[k + 1])
-        inner = geo.addLine(inner_pts[k], inner_pts[k + 1])
-        geo.mesh.setTransfiniteCurve(outer, n)
-        geo.mesh.setTransfiniteCurve(inner, n)
-        loop = geo.addCurveLoop([radial[k], outer, -radial[k + 1], -inner])
-        surface = geo.addPlaneSurface([loop])
-        geo.mesh.setTransfiniteSurface(surface)
-        geo.mesh.setRecombine(2, surface)
-        profile.append(surface)
+        axial = [geo.addLine(points[j][k], points[j][k + 1]) for j in range(n_layers + 1)]
+        for line in axial:
+            geo.mesh.setTransfiniteCurve(line, n)
         mid = 0.5 * (heights[k] + heights[k + 1])
-        is_cone.append(part.cone_bottom_z <= mid <= part.cone_top_z)
+        for j in range(n_layers):
+            loop = geo.addCurveLoop([radial[j][k], axial[j + 1], -radial[j][k + 1], -axial[j]])
+            surface = geo.addPlaneSurface([loop])
+            geo.mesh.setTransfiniteSurface(surface)
+            geo.mesh.setRecombine(2, surface)
+            profile.append(surface)
+            is_cone.append(part.cone_bottom_z <= mid <= part.cone_top_z)
+            layer_of.append((j, k))
 
     entities = _PartEntities([], [], [], [], [], [], [])
     sources = [(2, s) for s in profile]
+    last_segment = len(heights) - 2
     for _ in range(4):
         out = geo.revolve(
             sources,
@@ -95,18 +113,21 @@ def _add_part(part: ConePart, z0: float, options: MeshOptions) -> _PartEntities:
         )
         # per source surface: [end surface, volume, laterals of radial_k, outer, radial_k+1, inner]
         sources = []
-        for k in range(len(profile)):
-            end, vol, lat_bottom, lat_outer, lat_top, lat_inner = out[6 * k : 6 * k + 6]
+        for i, (j, k) in enumerate(layer_of):
+            end, vol, lat_bottom, lat_outer, lat_top, lat_inner = out[6 * i : 6 * i + 6]
             sources.append(end)
             entities.volumes.append(vol[1])
-            entities.outer.append(lat_outer[1])
-            entities.inner.append(lat_inner[1])
-            if is_cone[k]:
-                entities.outer_cone.append(lat_outer[1])
-                entities.inner_cone.append(lat_inner[1])
+            if j == n_layers - 1:
+                entities.outer.append(lat_outer[1])
+                if is_cone[i]:
+                    entities.outer_cone.append(lat_outer[1])
+            if j == 0:
+                entities.inner.append(lat_inner[1])
+                if is_cone[i]:
+                    entities.inner_cone.append(lat_inner[1])
             if k == 0:
                 entities.bottom.append(lat_bottom[1])
-            if k == len(profile) - 1:
+            if k == last_segment:
                 entities.top.append(lat_top[1])
     return entities
 

@@ -214,6 +214,18 @@ def test_tube_mesh():
     assert owned_count(md, 3, tags.VOLUME) == 24 * 14 * 2
 
 
+@pytest.mark.parametrize("n_layers", [1, 2, 3])
+def test_nodes_on_exact_circles(n_layers):
+    """Every geometry node of a perfect tube (also inside the wall) lies on one of the
+    exact radii of the layer interfaces or their midpoints (hex27: no chord nodes)."""
+    part = ConePart(0.0, 0.600, 0.4, 0.0, 0.006)
+    md = create_tube_mesh(COMM, part, MeshOptions(n_circumferential=24, axial_size=0.1, n_layers=n_layers))
+    r = np.hypot(*md.mesh.geometry.x[:, :2].T)
+    exact = 0.294 + 0.006 * np.arange(2 * n_layers + 1) / (2 * n_layers)
+    distance = np.abs(r[:, None] - exact[None, :]).min(axis=1)
+    assert COMM.allreduce(float(distance.max(initial=0.0)), op=MPI.MAX) < 1e-12
+
+
 def test_paraview_export(scaled, tmp_path_factory):
     out = Path(COMM.bcast(str(tmp_path_factory.mktemp("xdmf")) if COMM.rank == 0 else None))
     md = create_joint_mesh(COMM, scaled, MeshOptions(n_circumferential=24))
