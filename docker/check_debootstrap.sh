@@ -72,7 +72,7 @@ set -u
 rm -rf "${XDG_CACHE_HOME:-/root/.cache}/fenics" /tmp/slipjoint-build /tmp/slipjoint-output
 cmake -S /src -B /tmp/slipjoint-build -DPYTHON=/usr/bin/python3 -DMPIEXEC=/usr/bin/mpirun >/dev/null || exit 1
 start=$(date +%s)
-(cd /tmp/slipjoint-build && ctest --output-on-failure "$@")
+(cd /tmp/slipjoint-build && ctest --output-on-failure --timeout 1800 "$@")
 status=$?
 echo "== suite wall time: $(( $(date +%s) - start )) s (exit status $status)"
 echo "== pytest counts per CTest test (first rank's line for _mpi2; skips show only here)"

@@ -50,17 +50,22 @@ if ! "${podman[@]}" image exists "docker.io/library/debian:$tag"; then
 fi
 
 echo "== podman build of $dockerfile ($(git -C "$source_dir" describe --always --dirty 2>/dev/null || echo 'no git'))"
+image=localhost/slipjoint-check
+if "${podman[@]}" image exists "$image"; then "${podman[@]}" rmi "$image" >/dev/null; fi
 start=$(date +%s)
 status=0
 "${podman[@]}" build "${limits[@]}" "${target[@]}" --ignorefile "$source_dir/docker/Dockerfile.dockerignore" \
-    -f "$dockerfile" -t localhost/slipjoint-check "$source_dir" || status=$?
+    -f "$dockerfile" -t "$image" "$source_dir" || status=$?
+if ! "${podman[@]}" image exists "$image" && [ "$status" = 0 ]; then
+    status=1  # an interrupted podman build can exit 0 without an image
+fi
 echo "== build wall time: $(( $(date +%s) - start )) s (exit status $status)"
 [ "$status" = 0 ] || { echo "== result: FAILED (build)"; exit "$status"; }
 
 output=${output:-$(mktemp -d /var/tmp/slipjoint-podman-output.XXXXXX)}
 mkdir -p "$output"
 echo "== default command, output in $output"
-"${podman[@]}" run --rm "${limits[@]}" -v "$output:/output" localhost/slipjoint-check || status=$?
+"${podman[@]}" run --rm --pull never "${limits[@]}" -v "$output:/output" "$image" || status=$?
 ls -l "$output"
 echo "== result: $([ "$status" = 0 ] && echo PASSED || echo "FAILED (default command, exit status $status)")"
 exit "$status"
