@@ -12,7 +12,7 @@ from dolfinx import fem
 
 from geometry import tags
 from geometry.mesh import create_joint_mesh
-from geometry.parameters import JointGeometry, MeshOptions, load_geometry
+from geometry.parameters import MeshOptions, load_geometry
 from solver.case import resolve_case_path
 from solver.dynamics import Settlement, StepResult, run
 

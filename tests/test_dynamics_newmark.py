@@ -224,3 +224,13 @@ def test_generalised_alpha_damps_unresolved_modes(beam, modes, rho_inf):
     print(f"rho_inf = {rho_inf}: amplitude ratio per step {ratios}")
     assert ratios["newmark"] == pytest.approx(1.0, abs=1e-9)
     assert ratios["alpha"] == pytest.approx(rho_inf, abs=0.05)
+
+
+def test_scheme_names():
+    from solver.newmark import scheme_from_name
+
+    assert scheme_from_name("newmark") == GeneralisedAlpha()
+    assert scheme_from_name("generalised-alpha", rho_inf=0.5) == GeneralisedAlpha.from_spectral_radius(0.5)
+    assert not scheme_from_name("quasi-static").dynamic
+    with pytest.raises(ValueError, match="unknown time scheme"):
+        scheme_from_name("euler")
