@@ -19,6 +19,7 @@ its factorisation) can be kept across steps while A is unchanged.
 import time
 from dataclasses import dataclass, field
 
+from mpi4py import MPI
 from petsc4py import PETSc
 
 import numpy as np
@@ -105,6 +106,7 @@ class ContactNewtonSolver:
         self._bc_local = np.unique(np.concatenate([bc.dof_indices()[0] for bc in bcs])) if bcs else np.zeros(0, np.int32)
         self.bcs = bcs
         comm = A.getComm()
+        self._comm = comm.tompi4py()
         self.ksp = PETSc.KSP().create(comm)
         self.ksp.setType(PETSc.KSP.Type.GMRES)
         self.ksp.setGMRESRestart(max(refactor_after, 1) + 5)
@@ -162,7 +164,9 @@ class ContactNewtonSolver:
             fresh = True
         elapsed = time.perf_counter() - t0
         timings["linear solve"] += elapsed
-        self._refactor_next = not fresh and elapsed > self._factor_time
+        # a collective decision: ranks that disagreed would deadlock in the factorisation
+        slow = not fresh and elapsed > self._factor_time
+        self._refactor_next = self._comm.allreduce(slow, op=MPI.LOR)
         reason = self.ksp.getConvergedReason()
         op.destroy()
         rhs.destroy()
