@@ -24,10 +24,12 @@ from mpi4py import MPI  # noqa: E402
 from solver.case import read_case  # noqa: E402
 from solver.installation import Installation, InstallationCase  # noqa: E402
 
-#: --quick: coarse mesh, short stages (a smoke run of about a minute on 2 ranks)
-QUICK = ["mesh.n_circumferential=12", "mesh.axial_size=0.2",
+#: --quick: coarse mesh, a fast self-weight ramp, short stages and frictionless contact (a smoke
+#: run of every stage and output; with friction, Newton stalls on this coarse mesh when the TP
+#: stops after the fast ramp, docs/install.md "Known problems")
+QUICK = ["mesh.n_circumferential=12", "mesh.axial_size=0.2", "friction.mu_s=0.0", "friction.mu_d=0.0",
          "self_weight.ramp_time_s=0.02", "self_weight.hold_s=0.004", "self_weight.dt_s=0.002",
-         "vibration.stage_duration_s=0.01", "vibration.n_modes=6", "vibration.n_frequencies=1",
+         "vibration.stage_duration_s=0.005", "vibration.n_modes=6", "vibration.n_frequencies=1",
          "vibration.lead_in_hz=[100.0]", "time.steps_per_period=8", "output.checkpoint_every=20"]
 
 #: the default run (no options): a coarser mesh and shorter stages than the case file, so that it

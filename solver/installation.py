@@ -566,7 +566,9 @@ class Installation:
         interface = ContactInterface(model.contact, model.contact.state.status)
         result = modal_analysis(model.V, self.case.material, model.bcs, [interface], EigenOptions(n_modes=vib.n_modes))
         parts = JointParts.for_joint(model.V, model.mesh_data, self.case.joint)
-        records = describe_modes(result, self.case.material, parts, zeta=max(self.case.damping.zeta, 1e-4))
+        nodes_around = self.case.mesh.n_circumferential * self.case.contact.degree
+        records = describe_modes(result, self.case.material, parts, zeta=max(self.case.damping.zeta, 1e-4),
+                                 m_max=min(12, (nodes_around - 1) // 2))
         if self.case.output.plots:
             write_outputs(result, records, self.output)
         else:

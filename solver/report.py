@@ -67,8 +67,9 @@ def stick_slip_events(time_s: np.ndarray, settlement_mm: np.ndarray, s0_mm: floa
     """Transitions stick -> slip of the TP as a whole (see the module docstring)."""
     t = np.concatenate([[t0_s], time_s])
     s = np.concatenate([[s0_mm], settlement_mm])
-    if len(t) <= window:
+    if len(t) < 2:
         return 0
+    window = min(window, len(t) - 1)  # a stage shorter than one period: its mean rate
     rate = (s[window:] - s[:-window]) / (t[window:] - t[:-window])
     slipping = np.concatenate([[False], rate > slip_rate_mm_s])
     return int(np.count_nonzero(slipping[1:] & ~slipping[:-1]))

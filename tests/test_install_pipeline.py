@@ -1,8 +1,12 @@
 """Installation pipeline on a tiny joint: outputs with units, positive self-weight settlement,
 and a killed-and-resumed run that ends with the results of an uninterrupted one (1e-8).
 
-The tiny configuration (12 around, 0.2 m axially, degree 2, a 0.05 s self-weight ramp and
-two short vibration stages; a 0.02 s ramp: with larger steps Newton stalls when the TP's lower edge first engages on this coarse mesh) says nothing about convergence; it exercises every stage.
+The tiny configuration (12 around, 0.2 m axially, degree 2, a 12 ms self-weight ramp, two
+vibration stages of 2 ms) says nothing about convergence; it exercises every stage and the
+checkpoints (mid self-weight, after the modal stage, mid vibration). It uses frictionless
+contact: with mu_s = 0.5 Newton stalls on this coarse mesh when the TP stops after the fast
+ramp (docs/install.md, "Known problems"); the pipeline and the checkpoint machinery do not
+depend on the friction law, and the pairing memory is still exercised.
 """
 
 import csv
@@ -17,10 +21,10 @@ from solver.installation import Installation, InstallationCase
 
 pytestmark = pytest.mark.mpi
 
-TINY = ["mesh.n_circumferential=12", "mesh.axial_size=0.2", "self_weight.ramp_time_s=0.02",
-        "self_weight.hold_s=0.004", "self_weight.dt_s=0.002", "vibration.n_modes=4",
-        "vibration.n_frequencies=1", "vibration.lead_in_hz=[]", "vibration.stage_duration_s=0.004",
-        "vibration.control=true", "time.steps_per_period=8", "output.checkpoint_every=4",
+TINY = ["mesh.n_circumferential=12", "mesh.axial_size=0.2", "friction.mu_s=0.0", "friction.mu_d=0.0",
+        "self_weight.ramp_time_s=0.012", "self_weight.hold_s=0.002", "self_weight.dt_s=0.002",
+        "vibration.n_modes=4", "vibration.n_frequencies=1", "vibration.lead_in_hz=[]",
+        "vibration.stage_duration_s=0.002", "time.steps_per_period=4", "output.checkpoint_every=3",
         "output.plots=false"]
 
 
@@ -80,7 +84,7 @@ def test_resume_equals_uninterrupted(uninterrupted, tmp_path_factory):
     out = _shared_dir(tmp_path_factory, "install_resumed")
     case = InstallationCase.from_dict(read_case("scaled", TINY))
     killed = Installation(MPI.COMM_WORLD, case, out, progress=False)
-    assert killed.run(stop_after_checkpoints=3) == {}  # stops mid-run after its 3rd checkpoint
+    assert killed.run(stop_after_checkpoints=4) == {}  # 4th checkpoint: inside the first vibration stage
     resumed = Installation(MPI.COMM_WORLD, case, out, progress=False)
     again = resumed.run(resume=True)
     u_ref, u = runner.model.problem.u.x.petsc_vec, resumed.model.problem.u.x.petsc_vec
