@@ -7,7 +7,8 @@ vibration at those frequencies plus a non-modal control, and a report. Outputs g
 ParaView files, summary.txt); a killed run continues with --resume.
 
 Usage: mpirun -n 2 python demos/install.py [--case scaled] [--set table.key=value ...]
-       [--mu-s 0.5 --mu-d 0.4 --d-c 100] [--damping rayleigh|modal] [--forcing eccentric|face|shaker]
+       [--mu-s 0.5 --mu-d 0.4 --d-c 100] [--damping rayleigh|modal]
+       [--forcing eccentric|face|shaker]
        [--quick] [--output DIR] [--resume]
 """
 
@@ -24,56 +25,107 @@ from mpi4py import MPI  # noqa: E402
 from solver.case import read_case  # noqa: E402
 from solver.installation import Installation, InstallationCase  # noqa: E402
 
-#: --quick: coarse mesh, a fast self-weight ramp, short stages and frictionless contact (a smoke
-#: run of every stage and output; with friction, Newton stalls on this coarse mesh when the TP
+#: --quick: coarse mesh, a fast self-weight ramp, no lead-in, short stages and frictionless
+#: contact (a smoke run of every stage and output; with friction, Newton stalls on this coarse mesh when the TP
 #: stops after the fast ramp, docs/install.md "Known problems")
-QUICK = ["mesh.n_circumferential=12", "mesh.axial_size=0.2", "friction.mu_s=0.0", "friction.mu_d=0.0",
-         "self_weight.ramp_time_s=0.02", "self_weight.hold_s=0.004", "self_weight.dt_s=0.002",
-         "vibration.stage_duration_s=0.005", "vibration.n_modes=6", "vibration.n_frequencies=1",
-         "vibration.lead_in_hz=[100.0]", "time.steps_per_period=8", "output.checkpoint_every=20"]
+QUICK = [
+    "mesh.n_circumferential=12",
+    "mesh.axial_size=0.2",
+    "friction.mu_s=0.0",
+    "friction.mu_d=0.0",
+    "self_weight.ramp_time_s=0.02",
+    "self_weight.hold_s=0.004",
+    "self_weight.dt_s=0.002",
+    "vibration.stage_duration_s=0.004",
+    "vibration.n_modes=6",
+    "vibration.n_frequencies=1",
+    "vibration.lead_in_hz=[]",
+    "time.steps_per_period=8",
+    "output.checkpoint_every=20",
+]
 
 #: the default run (no options): a coarser mesh and shorter stages than the case file, so that it
 #: finishes in reasonable time on 2 cores (docs/install.md, "Cost"); --set overrides them
-DEFAULT = ["mesh.n_circumferential=16", "mesh.axial_size=0.1", "vibration.stage_duration_s=0.03",
-           "time.steps_per_period=16", "vibration.n_modes=20"]
+DEFAULT = [
+    "mesh.n_circumferential=16",
+    "mesh.axial_size=0.1",
+    "vibration.stage_duration_s=0.03",
+    "time.steps_per_period=16",
+    "vibration.n_modes=20",
+]
 
 #: named options -> case keys
-NAMED = {"mesh_size": "mesh.axial_size", "n_circumferential": "mesh.n_circumferential", "degree": "contact.degree",
-         "mu_s": "friction.mu_s", "mu_d": "friction.mu_d", "d_c": "friction.d_c", "damping": "damping.model",
-         "zeta": "damping.zeta", "forcing": "vibration.forcing", "direction": "vibration.direction",
-         "lateral_fraction": "vibration.lateral_fraction", "amplitude": "vibration.amplitude_N",
-         "shaker_height": "vibration.shaker_height_m", "angle": "vibration.angle_deg",
-         "stage_duration": "vibration.stage_duration_s", "n_frequencies": "vibration.n_frequencies",
-         "steps_per_period": "time.steps_per_period"}
+NAMED = {
+    "mesh_size": "mesh.axial_size",
+    "n_circumferential": "mesh.n_circumferential",
+    "degree": "contact.degree",
+    "mu_s": "friction.mu_s",
+    "mu_d": "friction.mu_d",
+    "d_c": "friction.d_c",
+    "damping": "damping.model",
+    "zeta": "damping.zeta",
+    "forcing": "vibration.forcing",
+    "direction": "vibration.direction",
+    "lateral_fraction": "vibration.lateral_fraction",
+    "amplitude": "vibration.amplitude_N",
+    "shaker_height": "vibration.shaker_height_m",
+    "angle": "vibration.angle_deg",
+    "stage_duration": "vibration.stage_duration_s",
+    "n_frequencies": "vibration.n_frequencies",
+    "steps_per_period": "time.steps_per_period",
+}
 
 
 def parse(argv: list[str] | None) -> argparse.Namespace:
     p = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    p.add_argument("--case", default="scaled", help="case file or preset name in cases/ (scaled, full_scale)")
-    p.add_argument("--set", action="append", default=[], metavar="TABLE.KEY=VALUE",
-                   help="override a case entry, e.g. friction.mu_s=0.3 (repeatable)")
+    p.add_argument(
+        "--case", default="scaled", help="case file or preset name in cases/ (scaled, full_scale)"
+    )
+    p.add_argument(
+        "--set",
+        action="append",
+        default=[],
+        metavar="TABLE.KEY=VALUE",
+        help="override a case entry, e.g. friction.mu_s=0.3 (repeatable)",
+    )
     p.add_argument("--mesh-size", type=float, help="axial element size [m]")
     p.add_argument("--n-circumferential", type=int, help="elements around (multiple of 4)")
     p.add_argument("--degree", type=int, help="Lagrange degree of the displacement")
     p.add_argument("--mu-s", type=float, help="static friction coefficient")
     p.add_argument("--mu-d", type=float, help="dynamic friction coefficient")
     p.add_argument("--d-c", type=float, help="friction decay coefficient [s/m]")
-    p.add_argument("--damping", choices=["rayleigh", "modal"], help="damping model (default rayleigh)")
+    p.add_argument(
+        "--damping", choices=["rayleigh", "modal"], help="damping model (default rayleigh)"
+    )
     p.add_argument("--zeta", type=float, help="damping ratio")
-    p.add_argument("--forcing", choices=["eccentric", "face", "shaker"], help="where the vibration force acts")
-    p.add_argument("--direction", choices=["axial", "lateral", "both"], help="vibration force direction")
+    p.add_argument(
+        "--forcing", choices=["eccentric", "face", "shaker"], help="where the vibration force acts"
+    )
+    p.add_argument(
+        "--direction", choices=["axial", "lateral", "both"], help="vibration force direction"
+    )
     p.add_argument("--lateral-fraction", type=float, help="lateral part with --direction both")
-    p.add_argument("--amplitude", type=float, help="force amplitude of the modal/control stages [N]")
+    p.add_argument(
+        "--amplitude", type=float, help="force amplitude of the modal/control stages [N]"
+    )
     p.add_argument("--shaker-height", type=float, help="shaker: height above the TP lower end [m]")
     p.add_argument("--angle", type=float, help="circumferential position of the point force [deg]")
     p.add_argument("--stage-duration", type=float, help="duration of each vibration stage [s]")
     p.add_argument("--n-frequencies", type=int, help="number of ranked natural frequencies excited")
     p.add_argument("--steps-per-period", type=int, help="time steps per excitation period")
-    p.add_argument("--quick", action="store_true", help="coarse smoke run (about a minute on 2 unloaded cores)")
-    p.add_argument("--full", action="store_true", help="the case file's discretisation and stage durations "
-                   "(without the default run's cost reductions)")
+    p.add_argument(
+        "--quick", action="store_true", help="coarse smoke run (about a minute on 2 unloaded cores)"
+    )
+    p.add_argument(
+        "--full",
+        action="store_true",
+        help="the case file's discretisation and stage durations "
+        "(without the default run's cost reductions)",
+    )
     p.add_argument("--output", default="output/install", help="output folder")
-    p.add_argument("--resume", action="store_true", help="continue from the last checkpoint in --output")
+    p.add_argument(
+        "--resume", action="store_true", help="continue from the last checkpoint in --output"
+    )
     p.add_argument("--no-progress", action="store_true", help="no progress bar")
     return p.parse_args(argv)
 

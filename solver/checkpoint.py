@@ -39,7 +39,7 @@ def _rank_file(folder: Path, rank: int) -> Path:
 
 
 def save(folder: str | Path, problem, record: dict[str, Any]) -> None:
-    """Write the state of ``problem`` (a ``solver.dynamics.Elastodynamics``) and ``record`` (collective)."""
+    """Write the state of ``problem`` (``solver.dynamics.Elastodynamics``) and ``record``."""
     comm: MPI.Comm = problem.V.mesh.comm
     folder = Path(folder)
     tmp = folder.with_name(folder.name + ".tmp")
@@ -84,8 +84,10 @@ def read_manifest(folder: str | Path, comm: MPI.Comm) -> dict[str, Any]:
     if manifest is None:
         raise ValueError(f"no checkpoint in {folder} (nothing to resume)")
     if manifest["ranks"] != comm.size:
-        raise ValueError(f"checkpoint {folder} was written by {manifest['ranks']} rank(s); "
-                         f"resume with the same count (mpirun -n {manifest['ranks']}), not {comm.size}")
+        raise ValueError(
+            f"checkpoint {folder} was written by {manifest['ranks']} rank(s); "
+            f"resume with the same count (mpirun -n {manifest['ranks']}), not {comm.size}"
+        )
     return manifest
 
 
@@ -94,10 +96,15 @@ def restore(folder: str | Path, problem) -> dict[str, Any]:
     comm: MPI.Comm = problem.V.mesh.comm
     manifest = read_manifest(folder, comm)
     data = np.load(_rank_file(Path(folder), comm.rank))
-    ok = all(data[k].shape == f.x.array.shape for k, f in (("u", problem.u), ("v", problem.v), ("a", problem.a)))
+    ok = all(
+        data[k].shape == f.x.array.shape
+        for k, f in (("u", problem.u), ("v", problem.v), ("a", problem.a))
+    )
     if comm.allreduce(not ok, op=MPI.LOR):
-        raise ValueError(f"checkpoint {folder} does not match this discretisation "
-                         "(different mesh or degree than when it was written)")
+        raise ValueError(
+            f"checkpoint {folder} does not match this discretisation "
+            "(different mesh or degree than when it was written)"
+        )
     for key, f in (("u", problem.u), ("v", problem.v), ("a", problem.a)):
         f.x.array[:] = data[key]
     problem.t = float(manifest["time_s"])

@@ -44,8 +44,15 @@ from solver.damping import ModalDamping, RayleighDamping
 from solver.dynamics import Elastodynamics, Settlement, StepResult, assemble_structure, run
 from solver.elasticity import Material
 from solver.friction import FrictionLaw
-from solver.loads import (PointLoad, RampedAxialForce, Schedule, Stage, TopFaceLoad, TPLoading,
-                          shaker_point)
+from solver.loads import (
+    PointLoad,
+    RampedAxialForce,
+    Schedule,
+    Stage,
+    TopFaceLoad,
+    TPLoading,
+    shaker_point,
+)
 from solver.modal import EigenOptions, ModalResult, clamp, modal_analysis
 from solver.modal_interface import ContactInterface, bonded_band
 from solver.modal_report import JointParts, ModeRecord, describe_modes, write_csv, write_outputs
@@ -85,7 +92,9 @@ class ContactSettings:
         if not self.gamma0 > 0:
             raise ValueError(f"gamma0 must be positive, got {self.gamma0}")
         if self.theta != 1:
-            raise ValueError(f"theta must be 1 (the modal stage needs the symmetric tangent), got {self.theta}")
+            raise ValueError(
+                f"theta must be 1 (the modal stage needs the symmetric tangent), got {self.theta}"
+            )
         _check_choice("degree", self.degree, (1, 2, 3))
 
 
@@ -127,7 +136,9 @@ class TimeSettings:
         if not 0 <= self.rho_inf <= 1:
             raise ValueError(f"rho_inf must lie in [0, 1], got {self.rho_inf}")
         if not (isinstance(self.steps_per_period, int) and self.steps_per_period >= 4):
-            raise ValueError(f"steps_per_period must be an integer >= 4, got {self.steps_per_period!r}")
+            raise ValueError(
+                f"steps_per_period must be an integer >= 4, got {self.steps_per_period!r}"
+            )
         if not 0 < self.dt_min_fraction <= 1:
             raise ValueError(f"dt_min_fraction must lie in (0, 1], got {self.dt_min_fraction}")
 
@@ -144,9 +155,14 @@ class SelfWeightSettings:
 
     def __post_init__(self) -> None:
         if not self.force_N < 0:
-            raise ValueError(f"force_N must be negative (pushing the TP down), got {self.force_N} N")
+            raise ValueError(
+                f"force_N must be negative (pushing the TP down), got {self.force_N} N"
+            )
         if not (self.ramp_time_s >= 0 and self.hold_s >= 0 and self.ramp_time_s + self.hold_s > 0):
-            raise ValueError(f"need ramp_time_s, hold_s >= 0 with a positive sum, got {self.ramp_time_s}, {self.hold_s}")
+            raise ValueError(
+                f"need ramp_time_s, hold_s >= 0 with a positive sum, "
+                f"got {self.ramp_time_s}, {self.hold_s}"
+            )
         if not 0 < self.dt_s <= self.ramp_time_s + self.hold_s:
             raise ValueError(f"dt_s must lie in (0, ramp_time_s + hold_s], got {self.dt_s} s")
         if self.scheme:
@@ -178,7 +194,9 @@ class VibrationSettings:
     shaker_height_m: float = 1.2  #: shaker: height above the TP's lower end [m]
     stage_duration_s: float = 0.1
     lead_in_hz: tuple[float, ...] = (68.0, 100.0)
-    n_frequencies: int = 3  #: number of ranked natural frequencies excited (the m = 2, n = 1 mode is added)
+    n_frequencies: int = (
+        3  #: number of ranked natural frequencies excited (the m = 2, n = 1 mode is added)
+    )
     n_modes: int = 12  #: modes computed in the modal stage
     max_frequency_hz: float = 300.0  #: ranked modes above this are not excited [Hz]
     control: bool = True  #: insert a non-modal control frequency
@@ -193,7 +211,9 @@ class VibrationSettings:
         if not self.stage_duration_s > 0:
             raise ValueError(f"stage_duration_s must be positive, got {self.stage_duration_s} s")
         if not all(isinstance(f, (int, float)) and f > 0 for f in self.lead_in_hz):
-            raise ValueError(f"lead_in_hz must be a list of positive frequencies, got {self.lead_in_hz!r}")
+            raise ValueError(
+                f"lead_in_hz must be a list of positive frequencies, got {self.lead_in_hz!r}"
+            )
         if not (isinstance(self.n_frequencies, int) and self.n_frequencies >= 0):
             raise ValueError(f"n_frequencies must be an integer >= 0, got {self.n_frequencies!r}")
         if not (isinstance(self.n_modes, int) and self.n_modes >= 2):
@@ -202,8 +222,14 @@ class VibrationSettings:
             raise ValueError(f"max_frequency_hz must be positive, got {self.max_frequency_hz}")
 
     def stage(self, duration_s: float, frequency_hz: float, amplitude: float | str) -> Stage:
-        return Stage(duration_s, frequency_hz, amplitude, direction=self.direction,
-                     lateral_fraction=self.lateral_fraction, lateral_angle_deg=self.angle_deg)
+        return Stage(
+            duration_s,
+            frequency_hz,
+            amplitude,
+            direction=self.direction,
+            lateral_fraction=self.lateral_fraction,
+            lateral_angle_deg=self.angle_deg,
+        )
 
 
 @dataclass(frozen=True)
@@ -213,18 +239,37 @@ class OutputSettings:
     checkpoint_every: int = 100  #: steps between checkpoints (and at every stage end)
     paraview: bool = True
     plots: bool = True
-    slip_rate_mm_s: float = 1.0  #: the TP slips as a whole while d(settlement)/dt exceeds this [mm/s]
+    slip_rate_mm_s: float = (
+        1.0  #: the TP slips as a whole while d(settlement)/dt exceeds this [mm/s]
+    )
 
     def __post_init__(self) -> None:
         if not (isinstance(self.checkpoint_every, int) and self.checkpoint_every >= 1):
-            raise ValueError(f"checkpoint_every must be an integer >= 1, got {self.checkpoint_every!r}")
+            raise ValueError(
+                f"checkpoint_every must be an integer >= 1, got {self.checkpoint_every!r}"
+            )
         if not self.slip_rate_mm_s > 0:
             raise ValueError(f"slip_rate_mm_s must be positive, got {self.slip_rate_mm_s}")
 
 
-SECTIONS = {"contact": ContactSettings, "damping": DampingSettings, "time": TimeSettings,
-            "self_weight": SelfWeightSettings, "vibration": VibrationSettings, "output": OutputSettings}
-KNOWN_TABLES = {"geometry", "material", "mesh", "friction", "schedule", "modal", "_source", *SECTIONS}
+SECTIONS = {
+    "contact": ContactSettings,
+    "damping": DampingSettings,
+    "time": TimeSettings,
+    "self_weight": SelfWeightSettings,
+    "vibration": VibrationSettings,
+    "output": OutputSettings,
+}
+KNOWN_TABLES = {
+    "geometry",
+    "material",
+    "mesh",
+    "friction",
+    "schedule",
+    "modal",
+    "_source",
+    *SECTIONS,
+}
 
 
 @dataclass(frozen=True)
@@ -246,12 +291,15 @@ class InstallationCase:
 
     @classmethod
     def from_dict(cls, case: dict[str, Any]) -> "InstallationCase":
-        """Check every table of ``case`` (from ``solver.case.read_case``); ValueError names the problem."""
+        """Check every table of ``case`` (``solver.case.read_case``); ValueError names the problem."""
         source = case.get("_source", "case")
         try:
             unknown = set(case) - KNOWN_TABLES
             if unknown:
-                raise ValueError(f"unknown table(s) {sorted(unknown)}; expected some of {sorted(KNOWN_TABLES - {'_source'})}")
+                raise ValueError(
+                    f"unknown table(s) {sorted(unknown)}; "
+                    f"expected some of {sorted(KNOWN_TABLES - {'_source'})}"
+                )
             joint, material, mesh = geometry_from_case(case)
             settings = {}
             for name, kind in SECTIONS.items():
@@ -267,11 +315,15 @@ class InstallationCase:
             if schedule is not None:
                 for i, s in enumerate(schedule.stages):
                     if s.mode_number is not None and s.mode_number > vib.n_modes:
-                        raise ValueError(f"schedule stage {i + 1} asks for mode {s.mode_number} but the modal "
-                                         f"stage computes {vib.n_modes} (vibration.n_modes)")
+                        raise ValueError(
+                            f"schedule stage {i + 1} asks for mode {s.mode_number} but the modal "
+                            f"stage computes {vib.n_modes} (vibration.n_modes)"
+                        )
             if vib.forcing == "shaker" and not 0 <= vib.shaker_height_m <= joint.tp.total_length:
-                raise ValueError(f"[vibration] shaker_height_m = {vib.shaker_height_m} m lies outside the TP "
-                                 f"(0 .. {joint.tp.total_length} m)")
+                raise ValueError(
+                    f"[vibration] shaker_height_m = {vib.shaker_height_m} m lies outside the TP "
+                    f"(0 .. {joint.tp.total_length} m)"
+                )
         except ValueError as e:
             raise ValueError(f"{source}: {e}") from None
         return cls(joint, material, mesh, friction, schedule=schedule, source=source, **settings)
@@ -298,7 +350,7 @@ class InstallationProblem(Elastodynamics):
         self._evaluate_load(self.t, self._f_old)
 
     def rebuild_solver(self) -> None:
-        """Drop the factorisation/Newton workspace so the next step starts afresh (as after a resume)."""
+        """Drop the factorisation and Newton workspace: the next step starts afresh (as on resume)."""
         self._dt_of_A = None
 
 
@@ -334,29 +386,60 @@ def build_joint_model(comm: MPI.Comm, case: InstallationCase) -> JointModel:
     V = fem.functionspace(mesh_data.mesh, ("Lagrange", case.contact.degree, (3,)))
     bcs = [clamp(V, mesh_data.facet_tags, [tags.MP_CLAMPED])]
     M, K = assemble_structure(V, case.material, bcs)
-    contact = NitscheContact(V, mesh_data.facet_tags, getattr(tags, case.contact.slave),
-                             getattr(tags, case.contact.master), case.material, case.friction,
-                             gamma0=case.contact.gamma0, theta=case.contact.theta,
-                             lagged_friction=case.contact.lagged_friction)
+    contact = NitscheContact(
+        V,
+        mesh_data.facet_tags,
+        getattr(tags, case.contact.slave),
+        getattr(tags, case.contact.master),
+        case.material,
+        case.friction,
+        gamma0=case.contact.gamma0,
+        theta=case.contact.theta,
+        lagged_friction=case.contact.lagged_friction,
+    )
     d = case.damping
     if d.model == "rayleigh":
         damping = RayleighDamping.at_frequency(d.zeta, d.frequency_hz)
     else:
-        band = bonded_band(V, mesh_data.facet_tags, case.material, d.band_height, case.contact.gamma0)
+        band = bonded_band(
+            V, mesh_data.facet_tags, case.material, d.band_height, case.contact.gamma0
+        )
         modes = modal_analysis(V, case.material, bcs, [band], EigenOptions(n_modes=d.n_modes))
-        damping = ModalDamping(M, [u.x.petsc_vec for u in modes.modes], modes.frequencies_hz, d.zeta)
+        damping = ModalDamping(
+            M, [u.x.petsc_vec for u in modes.modes], modes.frequencies_hz, d.zeta
+        )
     sw = case.self_weight
     static = RampedAxialForce(sw.force_N, sw.ramp_time_s)
     top = TopFaceLoad(V, mesh_data.facet_tags, tags.TP_TOP)
-    problem = InstallationProblem(V, M, K, bcs, load=TPLoading(top, static_axial=static),
-                                  scheme=scheme_from_name(sw.scheme or case.time.scheme, case.time.rho_inf),
-                                  damping=damping, contact=contact,
-                                  newton_options={"max_iterations": case.contact.max_iterations,
-                                                  "max_backtracks": case.contact.max_backtracks})
+    problem = InstallationProblem(
+        V,
+        M,
+        K,
+        bcs,
+        load=TPLoading(top, static_axial=static),
+        scheme=scheme_from_name(sw.scheme or case.time.scheme, case.time.rho_inf),
+        damping=damping,
+        contact=contact,
+        newton_options={
+            "max_iterations": case.contact.max_iterations,
+            "max_backtracks": case.contact.max_backtracks,
+        },
+    )
     problem.initialise(0.0)
     settlement = Settlement(problem.u, case.joint, mesh_data.cell_tags)
-    return JointModel(case, mesh_data, V, bcs, contact, top, static, problem, settlement, damping,
-                      {"set-up": time.perf_counter() - t0})
+    return JointModel(
+        case,
+        mesh_data,
+        V,
+        bcs,
+        contact,
+        top,
+        static,
+        problem,
+        settlement,
+        damping,
+        {"set-up": time.perf_counter() - t0},
+    )
 
 
 # -- frequency choice -----------------------------------------------------------------------
@@ -394,14 +477,34 @@ def choose_frequencies(records: list[ModeRecord], settings: VibrationSettings) -
         if r.rank in seen_ranks:
             continue
         seen_ranks.add(r.rank)
-        chosen.append(Excitation(r.frequency_Hz, settings.amplitude_N, "modal", r.mode, r.m, r.n, r.rank,
-                                 f"rank {r.rank} of {len({x.rank for x in records})}: resonant interface slip "
-                                 f"{max(r.resonant_slip_axial_um, r.resonant_slip_lateral_um):.3g} um"))
+        chosen.append(
+            Excitation(
+                r.frequency_Hz,
+                settings.amplitude_N,
+                "modal",
+                r.mode,
+                r.m,
+                r.n,
+                r.rank,
+                f"rank {r.rank} of {len({x.rank for x in records})}: resonant interface slip "
+                f"{max(r.resonant_slip_axial_um, r.resonant_slip_lateral_um):.3g} um",
+            )
+        )
     m2n1 = [r for r in candidates if (r.m, r.n) == (2, 1)]
     if m2n1 and all((c.m, c.n) != (2, 1) for c in chosen):
         r = min(m2n1, key=lambda r: r.frequency_Hz)
-        chosen.append(Excitation(r.frequency_Hz, settings.amplitude_N, "modal", r.mode, r.m, r.n, r.rank,
-                                 "lowest m = 2, n = 1 mode (SPEC 5.4: most effective in the experiments)"))
+        chosen.append(
+            Excitation(
+                r.frequency_Hz,
+                settings.amplitude_N,
+                "modal",
+                r.mode,
+                r.m,
+                r.n,
+                r.rank,
+                "lowest m = 2, n = 1 mode (SPEC 5.4: most effective in the experiments)",
+            )
+        )
     chosen.sort(key=lambda e: e.frequency_Hz)
     if settings.control and chosen:
         natural = np.array([r.frequency_Hz for r in records])
@@ -411,11 +514,32 @@ def choose_frequencies(records: list[ModeRecord], settings: VibrationSettings) -
         grid = np.linspace(lo, hi, 2001)
         distance = np.min(np.abs(grid[:, None] - natural[None, :]), axis=1)
         f_c = float(grid[np.argmax(distance)])
-        chosen.append(Excitation(f_c, settings.amplitude_N, "control", 0, -1, -1, 0,
-                                 f"non-modal control: {distance.max():.1f} Hz from the nearest natural frequency"))
+        chosen.append(
+            Excitation(
+                f_c,
+                settings.amplitude_N,
+                "control",
+                0,
+                -1,
+                -1,
+                0,
+                f"non-modal control: {distance.max():.1f} Hz from the nearest natural frequency",
+            )
+        )
         chosen.sort(key=lambda e: e.frequency_Hz)
-    lead = [Excitation(f, "eccentric", "lead-in", 0, -1, -1, 0, "SPEC 3 reference sequence, eccentric amplitude")
-            for f in settings.lead_in_hz]
+    lead = [
+        Excitation(
+            f,
+            "eccentric",
+            "lead-in",
+            0,
+            -1,
+            -1,
+            0,
+            "SPEC 3 reference sequence, eccentric amplitude",
+        )
+        for f in settings.lead_in_hz
+    ]
     return lead + chosen
 
 
@@ -433,14 +557,25 @@ class StagePlan:
     reason: str = ""
 
 
-def _plan_vibration(schedule: Schedule, steps_per_period: int, reasons: list[str]) -> list[StagePlan]:
+def _plan_vibration(
+    schedule: Schedule, steps_per_period: int, reasons: list[str]
+) -> list[StagePlan]:
     plans = []
     for i, (stage, start) in enumerate(zip(schedule.stages, schedule.stage_starts)):
         f_max = max(stage.frequency(0.0), stage.frequency(stage.duration_s))
         periods = max(1, math.ceil(stage.duration_s * f_max)) if f_max > 0 else 1
         dt = stage.duration_s / (periods * steps_per_period)
-        plans.append(StagePlan(f"vibration {i + 1}", float(start), float(start + stage.duration_s), dt,
-                               stage.frequency(0.0), stage.amplitude(0.0), reasons[i] if i < len(reasons) else ""))
+        plans.append(
+            StagePlan(
+                f"vibration {i + 1}",
+                float(start),
+                float(start + stage.duration_s),
+                dt,
+                stage.frequency(0.0),
+                stage.amplitude(0.0),
+                reasons[i] if i < len(reasons) else "",
+            )
+        )
     return plans
 
 
@@ -452,8 +587,14 @@ class Installation:
     ends the run early after that many checkpoints (used to test resuming).
     """
 
-    def __init__(self, comm: MPI.Comm, case: InstallationCase, output: str | Path,
-                 log: Callable[[str], None] | None = None, progress: bool = True):
+    def __init__(
+        self,
+        comm: MPI.Comm,
+        case: InstallationCase,
+        output: str | Path,
+        log: Callable[[str], None] | None = None,
+        progress: bool = True,
+    ):
         self.comm, self.case = comm, case
         self.output = Path(output)
         self.log = log or (lambda s: print(s, flush=True) if comm.rank == 0 else None)
@@ -474,12 +615,19 @@ class Installation:
         return self.output / "checkpoint"
 
     def _record(self, next_stage: int, chunk: int) -> dict[str, Any]:
-        return {"next_stage": next_stage, "next_chunk": chunk, "history": self.history, "stages": self.stages,
-                "plans": [asdict(p) for p in self.plans], "excitations": [asdict(e) for e in self.excitations],
-                "natural_frequencies_Hz": self.natural_frequencies}
+        return {
+            "next_stage": next_stage,
+            "next_chunk": chunk,
+            "history": self.history,
+            "stages": self.stages,
+            "plans": [asdict(p) for p in self.plans],
+            "excitations": [asdict(e) for e in self.excitations],
+            "natural_frequencies_Hz": self.natural_frequencies,
+        }
 
     def _checkpoint(self, next_stage: int, chunk: int) -> None:
-        self.model.problem.rebuild_solver()  # a resumed run starts with a fresh factorisation, so do we
+        # a resumed run starts with a fresh factorisation, so does the uninterrupted one
+        self.model.problem.rebuild_solver()
         checkpoint.save(self.checkpoint_dir, self.model.problem, self._record(next_stage, chunk))
         self._checkpoints += 1
         if self._stop_after is not None and self._checkpoints >= self._stop_after:
@@ -495,24 +643,36 @@ class Installation:
             prev_t = self.history[-1]["time_s"] if self.history else 0.0
             schedule = loading.schedule or (loading.shaker[1] if loading.shaker else None)
             state = model.contact.state
-            counts = np.array([np.count_nonzero(state.status == s) for s in (Status.STICK, Status.SLIP)])
+            counts = np.array(
+                [np.count_nonzero(state.status == s) for s in (Status.STICK, Status.SLIP)]
+            )
             counts = self.comm.allreduce(counts, op=MPI.SUM)
             n_points = self.comm.allreduce(len(state.status))
             normal, _ = model.contact.forces()
-            row = {"time_s": t, "dt_s": t - prev_t, "stage": stage_index,
-                   "frequency_Hz": schedule.frequency(t) if schedule else 0.0,
-                   "amplitude_N": schedule.amplitude(t) if schedule else 0.0,
-                   "axial_force_N": float(model.static(t) + (schedule.force(t)[2] if schedule else 0.0)),
-                   **model.settlement(problem),
-                   "newton_iterations": problem.last_result.iterations if problem.last_result else 0,
-                   "stick_fraction": counts[0] / n_points, "slip_fraction": counts[1] / n_points,
-                   "normal_force_N": normal}
+            row = {
+                "time_s": t,
+                "dt_s": t - prev_t,
+                "stage": stage_index,
+                "frequency_Hz": schedule.frequency(t) if schedule else 0.0,
+                "amplitude_N": schedule.amplitude(t) if schedule else 0.0,
+                "axial_force_N": float(
+                    model.static(t) + (schedule.force(t)[2] if schedule else 0.0)
+                ),
+                **model.settlement(problem),
+                "newton_iterations": problem.last_result.iterations if problem.last_result else 0,
+                "stick_fraction": counts[0] / n_points,
+                "slip_fraction": counts[1] / n_points,
+                "normal_force_N": normal,
+            }
             self.history.append(row)
             writer.write(row)
             if bar is not None:
                 bar.update(row["dt_s"])
-                bar.set_postfix_str(f"{plan.name}, dt {row['dt_s']:.3g} s, settlement {row['settlement_mm']:.4f} mm, "
-                                    f"Newton {row['newton_iterations']}", refresh=False)
+                bar.set_postfix_str(
+                    f"{plan.name}, dt {row['dt_s']:.3g} s, settlement {row['settlement_mm']:.4f} mm, "
+                    f"Newton {row['newton_iterations']}",
+                    refresh=False,
+                )
             return {}
 
         return observe
@@ -530,13 +690,23 @@ class Installation:
             if chunk == n_chunks - 1:
                 t_end = plan.end_s
             if t_end > problem.t + 1e-12 * max(t_end, 1.0):
-                run(problem, t_end, plan.dt_s, dt_min=plan.dt_s * self.case.time.dt_min_fraction,
-                    observers=[observer], progress=False)
+                run(
+                    problem,
+                    t_end,
+                    plan.dt_s,
+                    dt_min=plan.dt_s * self.case.time.dt_min_fraction,
+                    observers=[observer],
+                    progress=False,
+                )
             if chunk < n_chunks - 1:
                 self._checkpoint(index, chunk + 1)
         rows = [r for r in self.history if r["stage"] == index]
-        summary = report.stage_summary(index, plan, rows, self.history, self.case.output.slip_rate_mm_s)
-        summary["wall_s"] = time.perf_counter() - wall0 if len(self.history) > rows0 else float("nan")
+        summary = report.stage_summary(
+            index, plan, rows, self.history, self.case.output.slip_rate_mm_s
+        )
+        summary["wall_s"] = (
+            time.perf_counter() - wall0 if len(self.history) > rows0 else float("nan")
+        )
         self.stages.append(summary)
         report.write_stage_table(self.stages, self.output / "stages.csv", self.comm)
         self._write_state(plan.name)
@@ -546,29 +716,43 @@ class Installation:
         if self.case.output.paraview:
             report.write_state(self.model, self.output, name, len(self.stages))
         if self.case.output.plots:
-            report.plot_contact_status(self.model.contact, self.case.joint, self.output / f"contact_status_{len(self.stages)}.png",
-                                       f"after {name}, t = {self.model.problem.t:.4g} s")
+            report.plot_contact_status(
+                self.model.contact,
+                self.case.joint,
+                self.output / f"contact_status_{len(self.stages)}.png",
+                f"after {name}, t = {self.model.problem.t:.4g} s",
+            )
 
     def _schedule(self, start_s: float) -> Schedule:
         """The vibration schedule from ``start_s``: the automatic one (from the chosen excitations)
         or the case's [[schedule]] with 'mode k' set to the settled joint's frequencies."""
         vib = self.case.vibration
         if self.case.schedule is None:
-            stages = [vib.stage(vib.stage_duration_s, e.frequency_Hz, e.amplitude_N) for e in self.excitations]
+            stages = [
+                vib.stage(vib.stage_duration_s, e.frequency_Hz, e.amplitude_N)
+                for e in self.excitations
+            ]
         else:
             stages = self.case.schedule.with_natural_frequencies(self.natural_frequencies).stages
         return Schedule(stages, start_s=start_s)
 
     def _modal_stage(self) -> None:
-        """Modes of the settled joint with the contact tangent at its current status; choice of frequencies."""
+        """Modes of the settled joint (contact tangent at its current status); frequency choice."""
         model, vib = self.model, self.case.vibration
         t0 = time.perf_counter()
         interface = ContactInterface(model.contact, model.contact.state.status)
-        result = modal_analysis(model.V, self.case.material, model.bcs, [interface], EigenOptions(n_modes=vib.n_modes))
+        result = modal_analysis(
+            model.V, self.case.material, model.bcs, [interface], EigenOptions(n_modes=vib.n_modes)
+        )
         parts = JointParts.for_joint(model.V, model.mesh_data, self.case.joint)
         nodes_around = self.case.mesh.n_circumferential * self.case.contact.degree
-        records = describe_modes(result, self.case.material, parts, zeta=max(self.case.damping.zeta, 1e-4),
-                                 m_max=min(12, (nodes_around - 1) // 2))
+        records = describe_modes(
+            result,
+            self.case.material,
+            parts,
+            zeta=max(self.case.damping.zeta, 1e-4),
+            m_max=min(12, (nodes_around - 1) // 2),
+        )
         if self.case.output.plots:
             write_outputs(result, records, self.output)
         else:
@@ -578,16 +762,31 @@ class Installation:
         if self.case.schedule is None:
             self.excitations = choose_frequencies(records, vib)
         else:
-            self.excitations = [Excitation(float(s.frequency_hz) if s.mode_number is None else
-                                           self.natural_frequencies[s.mode_number - 1], s.amplitude_N, "schedule",
-                                           s.mode_number or 0, -1, -1, 0, "[[schedule]] of the case")
-                                for s in self.case.schedule.stages]
+            self.excitations = [
+                Excitation(
+                    float(s.frequency_hz)
+                    if s.mode_number is None
+                    else self.natural_frequencies[s.mode_number - 1],
+                    s.amplitude_N,
+                    "schedule",
+                    s.mode_number or 0,
+                    -1,
+                    -1,
+                    0,
+                    "[[schedule]] of the case",
+                )
+                for s in self.case.schedule.stages
+            ]
         schedule = self._schedule(model.problem.t)
-        self.plans += _plan_vibration(schedule, self.case.time.steps_per_period, [e.reason for e in self.excitations])
+        self.plans += _plan_vibration(
+            schedule, self.case.time.steps_per_period, [e.reason for e in self.excitations]
+        )
         report.write_choice(self.excitations, self.output / "frequencies.csv", self.comm)
         tied = interface.tied_fraction()
-        self.log(f"modal stage: {len(records)} modes of the settled joint ({100 * tied:.1f} % of the contact points "
-                 f"tied) in {time.perf_counter() - t0:.1f} s; excitation:")
+        self.log(
+            f"modal stage: {len(records)} modes of the settled joint ({100 * tied:.1f} % of the contact points "
+            f"tied) in {time.perf_counter() - t0:.1f} s; excitation:"
+        )
         for e in self.excitations:
             amp = e.amplitude_N if isinstance(e.amplitude_N, str) else f"{e.amplitude_N:.0f} N"
             self.log(f"  {e.frequency_Hz:8.2f} Hz  {amp:>9}  {e.role:8} {e.reason}")
@@ -612,22 +811,37 @@ class Installation:
             loading.shaker = (PointLoad(model.V, point), schedule)
         model.problem.refresh_load()
 
-    def run(self, resume: bool = False, stop_after_checkpoints: int | None = None) -> dict[str, Any]:
+    def run(
+        self, resume: bool = False, stop_after_checkpoints: int | None = None
+    ) -> dict[str, Any]:
         """Run (or resume) the installation; returns the summary (collective)."""
         self._stop_after = stop_after_checkpoints
         case, comm = self.case, self.comm
         manifest = checkpoint.read_manifest(self.checkpoint_dir, comm) if resume else None
         if comm.rank == 0:
             self.output.mkdir(parents=True, exist_ok=True)
-            (self.output / "case.json").write_text(json.dumps(case.describe(), indent=1, default=str))
+            (self.output / "case.json").write_text(
+                json.dumps(case.describe(), indent=1, default=str)
+            )
         self.model = build_joint_model(comm, case)
         model = self.model
-        self.log(f"joint: {model.n_dofs} dofs (degree {case.contact.degree}, {case.mesh.n_circumferential} around, "
-                 f"{case.mesh.axial_size} m axially), {comm.size} rank(s), damping {case.damping.model}; "
-                 f"set-up {model.timings_s['set-up']:.1f} s")
+        self.log(
+            f"joint: {model.n_dofs} dofs (degree {case.contact.degree}, {case.mesh.n_circumferential} around, "
+            f"{case.mesh.axial_size} m axially), {comm.size} rank(s), damping {case.damping.model}; "
+            f"set-up {model.timings_s['set-up']:.1f} s"
+        )
         sw = case.self_weight
-        self.plans = [StagePlan("self-weight", 0.0, sw.duration_s, sw.dt_s, 0.0, 0.0,
-                                f"{-sw.force_N:.0f} N down over {sw.ramp_time_s} s, held {sw.hold_s} s")]
+        self.plans = [
+            StagePlan(
+                "self-weight",
+                0.0,
+                sw.duration_s,
+                sw.dt_s,
+                0.0,
+                0.0,
+                f"{-sw.force_N:.0f} N down over {sw.ramp_time_s} s, held {sw.hold_s} s",
+            )
+        ]
         next_stage, next_chunk = 0, 0
         if manifest is not None:
             checkpoint.restore(self.checkpoint_dir, model.problem)
@@ -636,7 +850,9 @@ class Installation:
             self.excitations = [Excitation(**e) for e in manifest["excitations"]]
             self.natural_frequencies = manifest["natural_frequencies_Hz"]
             next_stage, next_chunk = manifest["next_stage"], manifest["next_chunk"]
-            self.log(f"resumed at t = {model.problem.t:.6g} s (stage {next_stage + 1}, chunk {next_chunk})")
+            self.log(
+                f"resumed at t = {model.problem.t:.6g} s (stage {next_stage + 1}, chunk {next_chunk})"
+            )
         writer = report.HistoryWriter(self.output / "history.csv", comm, self.history)
         bar = None
         try:
@@ -651,7 +867,9 @@ class Installation:
                 self._checkpoint(1, 0)
             self._install_schedule()
             if len(self.plans) > 1 and next_stage < len(self.plans):
-                if (sw.scheme or case.time.scheme) != case.time.scheme:  # vibration stages: the [time] scheme
+                if (
+                    sw.scheme or case.time.scheme
+                ) != case.time.scheme:  # vibration stages: the [time] scheme
                     model.problem.scheme = scheme_from_name(case.time.scheme, case.time.rho_inf)
                     model.problem.rebuild_solver()
                 bar = self._bar(self.plans[-1].end_s - model.problem.t)
@@ -666,7 +884,9 @@ class Installation:
             if bar is not None:
                 bar.close()
         summary = report.summary(self.stages, model.contact, self.history)
-        report.write_summary(summary, self.stages, self.excitations, self.output / "summary.txt", comm)
+        report.write_summary(
+            summary, self.stages, self.excitations, self.output / "summary.txt", comm
+        )
         if case.output.plots:
             report.plot_history(self.history, self.stages, self.output, comm)
         self.log(report.format_summary(summary, self.stages, self.excitations))
@@ -677,7 +897,11 @@ class Installation:
             return None
         from tqdm import tqdm
 
-        return tqdm(total=total, unit="s", bar_format="{l_bar}{bar}| {n:.4g}/{total:.4g} s simulated {postfix}")
+        return tqdm(
+            total=total,
+            unit="s",
+            bar_format="{l_bar}{bar}| {n:.4g}/{total:.4g} s simulated {postfix}",
+        )
 
 
 class _Stopped(Exception):

@@ -27,11 +27,37 @@ from mpi4py import MPI
 
 from solver.contact import NitscheContact, Status
 
-HISTORY_COLUMNS = ["time_s", "dt_s", "stage", "frequency_Hz", "amplitude_N", "axial_force_N", "settlement_mm",
-                   "newton_iterations", "stick_fraction", "slip_fraction", "normal_force_N"]
-STAGE_COLUMNS = ["stage", "name", "start_s", "end_s", "dt_s", "frequency_Hz", "amplitude_N", "steps",
-                 "settlement_start_mm", "settlement_end_mm", "gained_mm", "stick_slip_events",
-                 "newton_iterations_mean", "newton_iterations_max", "wall_s", "reason"]
+HISTORY_COLUMNS = [
+    "time_s",
+    "dt_s",
+    "stage",
+    "frequency_Hz",
+    "amplitude_N",
+    "axial_force_N",
+    "settlement_mm",
+    "newton_iterations",
+    "stick_fraction",
+    "slip_fraction",
+    "normal_force_N",
+]
+STAGE_COLUMNS = [
+    "stage",
+    "name",
+    "start_s",
+    "end_s",
+    "dt_s",
+    "frequency_Hz",
+    "amplitude_N",
+    "steps",
+    "settlement_start_mm",
+    "settlement_end_mm",
+    "gained_mm",
+    "stick_slip_events",
+    "newton_iterations_mean",
+    "newton_iterations_max",
+    "wall_s",
+    "reason",
+]
 
 
 def _fmt(v: Any) -> str:
@@ -62,8 +88,14 @@ class HistoryWriter:
             self._file = None
 
 
-def stick_slip_events(time_s: np.ndarray, settlement_mm: np.ndarray, s0_mm: float, t0_s: float,
-                      window: int, slip_rate_mm_s: float) -> int:
+def stick_slip_events(
+    time_s: np.ndarray,
+    settlement_mm: np.ndarray,
+    s0_mm: float,
+    t0_s: float,
+    window: int,
+    slip_rate_mm_s: float,
+) -> int:
     """Transitions stick -> slip of the TP as a whole (see the module docstring)."""
     t = np.concatenate([[t0_s], time_s])
     s = np.concatenate([[s0_mm], settlement_mm])
@@ -75,7 +107,9 @@ def stick_slip_events(time_s: np.ndarray, settlement_mm: np.ndarray, s0_mm: floa
     return int(np.count_nonzero(slipping[1:] & ~slipping[:-1]))
 
 
-def stage_summary(index: int, plan, rows: list[dict], history: list[dict], slip_rate_mm_s: float) -> dict[str, Any]:
+def stage_summary(
+    index: int, plan, rows: list[dict], history: list[dict], slip_rate_mm_s: float
+) -> dict[str, Any]:
     """Summary of stage ``index`` from its history rows."""
     before = [r for r in history if r["stage"] < index]
     s0 = before[-1]["settlement_mm"] if before else 0.0
@@ -84,13 +118,23 @@ def stage_summary(index: int, plan, rows: list[dict], history: list[dict], slip_
     s = np.array([r["settlement_mm"] for r in rows])
     its = np.array([r["newton_iterations"] for r in rows]) if rows else np.zeros(1)
     window = max(1, round(1.0 / (plan.frequency_Hz * plan.dt_s))) if plan.frequency_Hz > 0 else 1
-    return {"stage": index, "name": plan.name, "start_s": plan.start_s, "end_s": plan.end_s, "dt_s": plan.dt_s,
-            "frequency_Hz": plan.frequency_Hz, "amplitude_N": plan.amplitude_N, "steps": len(rows),
-            "settlement_start_mm": s0, "settlement_end_mm": float(s[-1]) if len(s) else s0,
-            "gained_mm": (float(s[-1]) if len(s) else s0) - s0,
-            "stick_slip_events": stick_slip_events(t, s, s0, t0, window, slip_rate_mm_s),
-            "newton_iterations_mean": float(its.mean()), "newton_iterations_max": int(its.max()),
-            "reason": plan.reason}
+    return {
+        "stage": index,
+        "name": plan.name,
+        "start_s": plan.start_s,
+        "end_s": plan.end_s,
+        "dt_s": plan.dt_s,
+        "frequency_Hz": plan.frequency_Hz,
+        "amplitude_N": plan.amplitude_N,
+        "steps": len(rows),
+        "settlement_start_mm": s0,
+        "settlement_end_mm": float(s[-1]) if len(s) else s0,
+        "gained_mm": (float(s[-1]) if len(s) else s0) - s0,
+        "stick_slip_events": stick_slip_events(t, s, s0, t0, window, slip_rate_mm_s),
+        "newton_iterations_mean": float(its.mean()),
+        "newton_iterations_max": int(its.max()),
+        "reason": plan.reason,
+    }
 
 
 def write_table(rows: list[dict], columns: list[str], path: Path, comm: MPI.Comm) -> None:
@@ -112,14 +156,21 @@ def write_choice(excitations, path: Path, comm: MPI.Comm) -> None:
     from dataclasses import asdict
 
     rows = [asdict(e) for e in excitations]
-    write_table(rows, ["frequency_Hz", "amplitude_N", "role", "mode", "m", "n", "rank", "reason"], path, comm)
+    write_table(
+        rows,
+        ["frequency_Hz", "amplitude_N", "role", "mode", "m", "n", "rank", "reason"],
+        path,
+        comm,
+    )
 
 
 def format_stage(s: dict) -> str:
     f = f"{s['frequency_Hz']:7.2f} Hz" if s["frequency_Hz"] else "   static "
-    return (f"{s['name']:>12}: {f}, {s['steps']:5d} steps, settlement {s['settlement_end_mm']:8.4f} mm "
-            f"(+{s['gained_mm']:.4f} mm), {s['stick_slip_events']} stick-slip event(s), "
-            f"Newton {s['newton_iterations_mean']:.2f}/step")
+    return (
+        f"{s['name']:>12}: {f}, {s['steps']:5d} steps, settlement {s['settlement_end_mm']:8.4f} mm "
+        f"(+{s['gained_mm']:.4f} mm), {s['stick_slip_events']} stick-slip event(s), "
+        f"Newton {s['newton_iterations_mean']:.2f}/step"
+    )
 
 
 def contact_counts(contact: NitscheContact) -> dict[str, float]:
@@ -127,28 +178,39 @@ def contact_counts(contact: NitscheContact) -> dict[str, float]:
     comm = contact.V.mesh.comm
     st = contact.state.status
     counts = comm.allreduce(np.array([np.count_nonzero(st == s) for s in Status]), op=MPI.SUM)
-    return {f"{s.name.lower()}_fraction": float(c / max(counts.sum(), 1)) for s, c in zip(Status, counts)}
+    return {
+        f"{s.name.lower()}_fraction": float(c / max(counts.sum(), 1))
+        for s, c in zip(Status, counts)
+    }
 
 
 def summary(stages: list[dict], contact: NitscheContact, history: list[dict]) -> dict[str, Any]:
     normal, friction = contact.forces()
-    return {"total_settlement_mm": history[-1]["settlement_mm"] if history else 0.0,
-            "stick_slip_events": int(sum(s["stick_slip_events"] for s in stages)),
-            "steps": len(history), "end_time_s": history[-1]["time_s"] if history else 0.0,
-            "normal_force_N": normal, "friction_force_z_N": float(friction[2]), **contact_counts(contact)}
+    return {
+        "total_settlement_mm": history[-1]["settlement_mm"] if history else 0.0,
+        "stick_slip_events": int(sum(s["stick_slip_events"] for s in stages)),
+        "steps": len(history),
+        "end_time_s": history[-1]["time_s"] if history else 0.0,
+        "normal_force_N": normal,
+        "friction_force_z_N": float(friction[2]),
+        **contact_counts(contact),
+    }
 
 
 def format_summary(summary: dict, stages: list[dict], excitations) -> str:
     lines = ["", "=" * 78, "installation summary", "-" * 78]
     lines += [format_stage(s) for s in stages]
-    lines += ["-" * 78,
-              f"total settlement {summary['total_settlement_mm']:.4f} mm after {summary['end_time_s']:.4g} s "
-              f"({summary['steps']} steps), {summary['stick_slip_events']} stick-slip event(s)",
-              f"final contact: {100 * summary['stick_fraction']:.1f} % stick, {100 * summary['slip_fraction']:.1f} % slip, "
-              f"{100 * summary['open_fraction']:.1f} % open of the TP contact points; normal force "
-              f"{summary['normal_force_N'] / 1e3:.2f} kN, axial friction {summary['friction_force_z_N'] / 1e3:.2f} kN",
-              "excitation frequencies: " + ", ".join(f"{e.frequency_Hz:.1f} Hz ({e.role})" for e in excitations),
-              "=" * 78]
+    lines += [
+        "-" * 78,
+        f"total settlement {summary['total_settlement_mm']:.4f} mm after {summary['end_time_s']:.4g} s "
+        f"({summary['steps']} steps), {summary['stick_slip_events']} stick-slip event(s)",
+        f"final contact: {100 * summary['stick_fraction']:.1f} % stick, {100 * summary['slip_fraction']:.1f} % slip, "
+        f"{100 * summary['open_fraction']:.1f} % open of the TP contact points; normal force "
+        f"{summary['normal_force_N'] / 1e3:.2f} kN, axial friction {summary['friction_force_z_N'] / 1e3:.2f} kN",
+        "excitation frequencies: "
+        + ", ".join(f"{e.frequency_Hz:.1f} Hz ({e.role})" for e in excitations),
+        "=" * 78,
+    ]
     return "\n".join(lines)
 
 
@@ -158,7 +220,7 @@ def write_summary(summary: dict, stages, excitations, path: Path, comm: MPI.Comm
 
 
 def write_state(model, folder: Path, name: str, k: int) -> None:
-    """Displacement (VTX, time = simulated time) and contact points (.vtp) after stage k (collective)."""
+    """Displacement (VTX, time = simulated time) and contact points (.vtp) after stage k."""
     from dolfinx import io
 
     u = model.problem.u
@@ -168,7 +230,7 @@ def write_state(model, folder: Path, name: str, k: int) -> None:
 
 
 def plot_contact_status(contact: NitscheContact, joint, path: Path, title: str) -> None:
-    """Contact status of the slave points unwrapped: angle [deg] against height above the TP's lower end [mm]."""
+    """Contact status of the slave points: angle [deg] against height above the TP's lower end [mm]."""
     comm = contact.V.mesh.comm
     st = contact.state
     x = comm.gather(contact.slave.points, root=0)
@@ -182,9 +244,15 @@ def plot_contact_status(contact: NitscheContact, joint, path: Path, title: str) 
     theta = np.degrees(np.arctan2(x[:, 1], x[:, 0])) % 360
     z = 1e3 * (x[:, 2] - joint.tp_offset)
     fig, ax = plt.subplots(figsize=(8, 4))
-    for s, colour in ((Status.OPEN, "lightgrey"), (Status.STICK, "tab:blue"), (Status.SLIP, "tab:red")):
+    for s, colour in (
+        (Status.OPEN, "lightgrey"),
+        (Status.STICK, "tab:blue"),
+        (Status.SLIP, "tab:red"),
+    ):
         sel = status == s
-        ax.scatter(theta[sel], z[sel], s=4, c=colour, label=f"{s.name.lower()} ({np.count_nonzero(sel)})")
+        ax.scatter(
+            theta[sel], z[sel], s=4, c=colour, label=f"{s.name.lower()} ({np.count_nonzero(sel)})"
+        )
     ax.set_xlabel("angle [deg]")
     ax.set_ylabel("height above the TP lower end [mm]")
     ax.set_title(f"contact status {title}")
@@ -217,7 +285,12 @@ def plot_history(history: list[dict], stages: list[dict], folder: Path, comm: MP
     if vib:
         ax.bar([s["frequency_Hz"] for s in vib], [1e3 * s["gained_mm"] for s in vib], width=3.0)
         for s in vib:
-            ax.annotate(s["name"].split()[-1], (s["frequency_Hz"], 1e3 * s["gained_mm"]), ha="center", va="bottom")
+            ax.annotate(
+                s["name"].split()[-1],
+                (s["frequency_Hz"], 1e3 * s["gained_mm"]),
+                ha="center",
+                va="bottom",
+            )
     ax.set_xlabel("excitation frequency [Hz]")
     ax.set_ylabel("settlement gained in the stage [um]")
     fig.tight_layout()

@@ -19,21 +19,27 @@ def test_presets_are_valid_installation_cases():
     assert InstallationCase.from_dict(read_case("full_scale")).self_weight.force_N < 0
 
 
-@pytest.mark.parametrize("override, words", [
-    ("friction.mu_s=0.3", ["mu_d", "must not exceed mu_s"]),
-    ("friction.mu=0.3", ["[friction]", "unknown key", "mu"]),
-    ("damping.model=viscous", ["model", "rayleigh", "modal"]),
-    ("vibration.forcing=motor", ["forcing", "eccentric"]),
-    ("vibration.forcing=shaker vibration.shaker_height_m=5.0", ["shaker_height_m", "outside the TP"]),
-    ("vibration.forcing=shaker", None),  # valid: default height lies on the TP
-    ("self_weight.force_N=10e3", ["force_N", "negative"]),
-    ("time.scheme=euler", ["scheme", "generalised-alpha"]),
-    ("time.steps_per_period=2", ["steps_per_period"]),
-    ("contact.slave=MP_CONTACT", ["slave and master must differ"]),
-    ("output.checkpoint_every=0", ["checkpoint_every"]),
-    ("mesh.n_circumferential=10", ["n_circumferential", "multiple of 4"]),
-    ("loading.force=1", ["unknown table", "loading"]),
-])
+@pytest.mark.parametrize(
+    "override, words",
+    [
+        ("friction.mu_s=0.3", ["mu_d", "must not exceed mu_s"]),
+        ("friction.mu=0.3", ["[friction]", "unknown key", "mu"]),
+        ("damping.model=viscous", ["model", "rayleigh", "modal"]),
+        ("vibration.forcing=motor", ["forcing", "eccentric"]),
+        (
+            "vibration.forcing=shaker vibration.shaker_height_m=5.0",
+            ["shaker_height_m", "outside the TP"],
+        ),
+        ("vibration.forcing=shaker", None),  # valid: default height lies on the TP
+        ("self_weight.force_N=10e3", ["force_N", "negative"]),
+        ("time.scheme=euler", ["scheme", "generalised-alpha"]),
+        ("time.steps_per_period=2", ["steps_per_period"]),
+        ("contact.slave=MP_CONTACT", ["slave and master must differ"]),
+        ("output.checkpoint_every=0", ["checkpoint_every"]),
+        ("mesh.n_circumferential=10", ["n_circumferential", "multiple of 4"]),
+        ("loading.force=1", ["unknown table", "loading"]),
+    ],
+)
 def test_bad_entries_name_the_problem(override, words):
     if words is None:
         _case(*override.split())
@@ -51,14 +57,18 @@ def test_bad_schedule_stage(tmp_path_factory):
     path = None
     if comm.rank == 0:
         path = tmp_path_factory.mktemp("case") / "bad_schedule.toml"
-        text = (read_case_text() + '\n[[schedule]]\nduration_s = 0.1\nfrequency_hz = 100.0\n'
-                '[[schedule]]\nduration_s = -1.0\nfrequency_hz = 50.0\n')
+        text = (
+            read_case_text() + "\n[[schedule]]\nduration_s = 0.1\nfrequency_hz = 100.0\n"
+            "[[schedule]]\nduration_s = -1.0\nfrequency_hz = 50.0\n"
+        )
         path.write_text(text)
     path = comm.bcast(path, root=0)
     with pytest.raises(ValueError, match=r"schedule stage 2.*duration_s"):
         InstallationCase.from_dict(read_case(path))
     with pytest.raises(ValueError, match=r"mode 40.*n_modes"):
-        InstallationCase.from_dict(read_case(path, ["schedule=[{duration_s = 0.1, frequency_hz = 'mode 40'}]"]))
+        InstallationCase.from_dict(
+            read_case(path, ["schedule=[{duration_s = 0.1, frequency_hz = 'mode 40'}]"])
+        )
 
 
 def read_case_text() -> str:
@@ -71,12 +81,28 @@ def test_demo_rejects_bad_options_before_computing(tmp_path_factory, capsys):
     import demos.install as demo
 
     comm = MPI.COMM_WORLD
-    out = comm.bcast(str(tmp_path_factory.mktemp("out") / "run") if comm.rank == 0 else None, root=0)
+    out = comm.bcast(
+        str(tmp_path_factory.mktemp("out") / "run") if comm.rank == 0 else None, root=0
+    )
     assert demo.main(["--mu-s", "-1", "--output", out]) == 2
     assert demo.main(["--case", "no_such_case", "--output", out]) == 2
     assert demo.main(["--set", "friction.d_c", "--output", out]) == 2
-    assert demo.main(["--resume", "--output", out, "--set", "mesh.n_circumferential=8",
-                      "--set", "mesh.axial_size=0.7", "--set", "contact.degree=1"]) == 2
+    assert (
+        demo.main(
+            [
+                "--resume",
+                "--output",
+                out,
+                "--set",
+                "mesh.n_circumferential=8",
+                "--set",
+                "mesh.axial_size=0.7",
+                "--set",
+                "contact.degree=1",
+            ]
+        )
+        == 2
+    )
     err = capsys.readouterr().err
     if comm.rank == 0:
         assert "friction coefficients must be >= 0" in err

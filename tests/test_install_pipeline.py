@@ -21,11 +21,22 @@ from solver.installation import Installation, InstallationCase
 
 pytestmark = pytest.mark.mpi
 
-TINY = ["mesh.n_circumferential=12", "mesh.axial_size=0.2", "friction.mu_s=0.0", "friction.mu_d=0.0",
-        "self_weight.ramp_time_s=0.012", "self_weight.hold_s=0.002", "self_weight.dt_s=0.002",
-        "vibration.n_modes=4", "vibration.n_frequencies=1", "vibration.lead_in_hz=[]",
-        "vibration.stage_duration_s=0.002", "time.steps_per_period=4", "output.checkpoint_every=3",
-        "output.plots=false"]
+TINY = [
+    "mesh.n_circumferential=12",
+    "mesh.axial_size=0.2",
+    "friction.mu_s=0.0",
+    "friction.mu_d=0.0",
+    "self_weight.ramp_time_s=0.012",
+    "self_weight.hold_s=0.002",
+    "self_weight.dt_s=0.002",
+    "vibration.n_modes=4",
+    "vibration.n_frequencies=1",
+    "vibration.lead_in_hz=[]",
+    "vibration.stage_duration_s=0.002",
+    "time.steps_per_period=4",
+    "output.checkpoint_every=3",
+    "output.plots=false",
+]
 
 
 def _shared_dir(factory, name: str) -> Path:
@@ -54,8 +65,12 @@ def test_pipeline_settles_and_writes_outputs(uninterrupted):
     runner, summary, out = uninterrupted
     stages = runner.stages
     assert stages[0]["name"] == "self-weight"
-    print(f"\nself-weight settlement {stages[0]['gained_mm']:.4f} mm; stages "
-          + ", ".join(f"{s['name']} {s['frequency_Hz']:.1f} Hz +{s['gained_mm']:.2e} mm" for s in stages[1:]))
+    print(
+        f"\nself-weight settlement {stages[0]['gained_mm']:.4f} mm; stages "
+        + ", ".join(
+            f"{s['name']} {s['frequency_Hz']:.1f} Hz +{s['gained_mm']:.2e} mm" for s in stages[1:]
+        )
+    )
     assert stages[0]["gained_mm"] > 0  # 10 kN down: the TP slides down
     assert [e.role for e in runner.excitations].count("control") == 1
     assert len(stages) == 1 + len(runner.excitations)
@@ -63,12 +78,22 @@ def test_pipeline_settles_and_writes_outputs(uninterrupted):
     comm = MPI.COMM_WORLD
     if comm.rank == 0:
         header, rows = _read_csv(out / "history.csv")
-        for column in ("time_s", "settlement_mm", "frequency_Hz", "amplitude_N", "newton_iterations"):
+        for column in (
+            "time_s",
+            "settlement_mm",
+            "frequency_Hz",
+            "amplitude_N",
+            "newton_iterations",
+        ):
             assert column in header
         assert len(rows) == summary["steps"] == len(runner.history)
-        assert float(rows[-1]["settlement_mm"]) == pytest.approx(summary["total_settlement_mm"], rel=1e-9)
+        assert float(rows[-1]["settlement_mm"]) == pytest.approx(
+            summary["total_settlement_mm"], rel=1e-9
+        )
         header, rows = _read_csv(out / "stages.csv")
-        assert {"gained_mm", "settlement_end_mm", "stick_slip_events", "frequency_Hz"} <= set(header)
+        assert {"gained_mm", "settlement_end_mm", "stick_slip_events", "frequency_Hz"} <= set(
+            header
+        )
         assert len(rows) == len(stages)
         header, rows = _read_csv(out / "frequencies.csv")
         assert "frequency_Hz" in header and all(r["reason"] for r in rows)
@@ -84,7 +109,9 @@ def test_resume_equals_uninterrupted(uninterrupted, tmp_path_factory):
     out = _shared_dir(tmp_path_factory, "install_resumed")
     case = InstallationCase.from_dict(read_case("scaled", TINY))
     killed = Installation(MPI.COMM_WORLD, case, out, progress=False)
-    assert killed.run(stop_after_checkpoints=4) == {}  # 4th checkpoint: inside the first vibration stage
+    assert (
+        killed.run(stop_after_checkpoints=4) == {}
+    )  # 4th checkpoint: inside the first vibration stage
     resumed = Installation(MPI.COMM_WORLD, case, out, progress=False)
     again = resumed.run(resume=True)
     u_ref, u = runner.model.problem.u.x.petsc_vec, resumed.model.problem.u.x.petsc_vec
@@ -93,10 +120,16 @@ def test_resume_equals_uninterrupted(uninterrupted, tmp_path_factory):
     relative = difference.norm() / u_ref.norm()
     s_ref = np.array([r["settlement_mm"] for r in runner.history])
     s = np.array([r["settlement_mm"] for r in resumed.history])
-    print(f"\nresume: |u - u_ref| / |u_ref| = {relative:.2e}, history rows {len(s)} vs {len(s_ref)}, "
-          f"final settlement {again['total_settlement_mm']:.10f} vs {summary['total_settlement_mm']:.10f} mm")
+    print(
+        f"\nresume: |u - u_ref| / |u_ref| = {relative:.2e}, history rows {len(s)} vs {len(s_ref)}, "
+        f"final settlement {again['total_settlement_mm']:.10f} vs {summary['total_settlement_mm']:.10f} mm"
+    )
     assert len(s) == len(s_ref)
     assert relative < 1e-8
     assert np.allclose(s, s_ref, rtol=1e-8, atol=1e-8 * np.abs(s_ref).max())
     assert again["total_settlement_mm"] == pytest.approx(summary["total_settlement_mm"], rel=1e-8)
-    assert [round(e.frequency_Hz, 9) for e in resumed.excitations] == [round(e.frequency_Hz, 9) for e in runner.excitations]
+    # the killed run computed its own modal stage: equal to the uninterrupted one to round-off
+    # (parallel MUMPS/SLEPc), which is why u differs from u_ref at about 1e-11 on 2 ranks
+    assert [e.frequency_Hz for e in resumed.excitations] == pytest.approx(
+        [e.frequency_Hz for e in runner.excitations], rel=1e-8
+    )
