@@ -26,8 +26,8 @@ from solver.case import read_case  # noqa: E402
 from solver.installation import Installation, InstallationCase  # noqa: E402
 
 #: --quick: coarse mesh, a fast self-weight ramp, no lead-in, short stages and frictionless
-#: contact (a smoke run of every stage and output; with friction, Newton stalls on this coarse mesh when the TP
-#: stops after the fast ramp, docs/install.md "Known problems")
+#: contact (a smoke run of every stage and output; with friction, Newton stalls on this coarse
+#: mesh when the TP stops after the fast ramp, docs/install.md "Known problems")
 QUICK = [
     "mesh.n_circumferential=12",
     "mesh.axial_size=0.2",

@@ -290,8 +290,8 @@ class InstallationCase:
     source: str = "case"
 
     @classmethod
-    def from_dict(cls, case: dict[str, Any]) -> "InstallationCase":
-        """Check every table of ``case`` (``solver.case.read_case``); ValueError names the problem."""
+    def from_dict(cls, case: dict[str, Any]) -> InstallationCase:
+        """Check every table of ``case`` (``read_case``); a ValueError names the problem."""
         source = case.get("_source", "case")
         try:
             unknown = set(case) - KNOWN_TABLES
@@ -350,7 +350,7 @@ class InstallationProblem(Elastodynamics):
         self._evaluate_load(self.t, self._f_old)
 
     def rebuild_solver(self) -> None:
-        """Drop the factorisation and Newton workspace: the next step starts afresh (as on resume)."""
+        """Drop the factorisation and Newton workspace: the next step starts afresh."""
         self._dt_of_A = None
 
 
@@ -669,8 +669,8 @@ class Installation:
             if bar is not None:
                 bar.update(row["dt_s"])
                 bar.set_postfix_str(
-                    f"{plan.name}, dt {row['dt_s']:.3g} s, settlement {row['settlement_mm']:.4f} mm, "
-                    f"Newton {row['newton_iterations']}",
+                    f"{plan.name}, dt {row['dt_s']:.3g} s, "
+                    f"settlement {row['settlement_mm']:.4f} mm, Newton {row['newton_iterations']}",
                     refresh=False,
                 )
             return {}
@@ -784,8 +784,8 @@ class Installation:
         report.write_choice(self.excitations, self.output / "frequencies.csv", self.comm)
         tied = interface.tied_fraction()
         self.log(
-            f"modal stage: {len(records)} modes of the settled joint ({100 * tied:.1f} % of the contact points "
-            f"tied) in {time.perf_counter() - t0:.1f} s; excitation:"
+            f"modal stage: {len(records)} modes of the settled joint ({100 * tied:.1f} % of the "
+            f"contact points tied) in {time.perf_counter() - t0:.1f} s; excitation:"
         )
         for e in self.excitations:
             amp = e.amplitude_N if isinstance(e.amplitude_N, str) else f"{e.amplitude_N:.0f} N"
@@ -826,8 +826,9 @@ class Installation:
         self.model = build_joint_model(comm, case)
         model = self.model
         self.log(
-            f"joint: {model.n_dofs} dofs (degree {case.contact.degree}, {case.mesh.n_circumferential} around, "
-            f"{case.mesh.axial_size} m axially), {comm.size} rank(s), damping {case.damping.model}; "
+            f"joint: {model.n_dofs} dofs (degree {case.contact.degree}, "
+            f"{case.mesh.n_circumferential} around, {case.mesh.axial_size} m axially), "
+            f"{comm.size} rank(s), damping {case.damping.model}; "
             f"set-up {model.timings_s['set-up']:.1f} s"
         )
         sw = case.self_weight
@@ -851,7 +852,8 @@ class Installation:
             self.natural_frequencies = manifest["natural_frequencies_Hz"]
             next_stage, next_chunk = manifest["next_stage"], manifest["next_chunk"]
             self.log(
-                f"resumed at t = {model.problem.t:.6g} s (stage {next_stage + 1}, chunk {next_chunk})"
+                f"resumed at t = {model.problem.t:.6g} s "
+                f"(stage {next_stage + 1}, chunk {next_chunk})"
             )
         writer = report.HistoryWriter(self.output / "history.csv", comm, self.history)
         bar = None

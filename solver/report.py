@@ -202,11 +202,18 @@ def format_summary(summary: dict, stages: list[dict], excitations) -> str:
     lines += [format_stage(s) for s in stages]
     lines += [
         "-" * 78,
-        f"total settlement {summary['total_settlement_mm']:.4f} mm after {summary['end_time_s']:.4g} s "
-        f"({summary['steps']} steps), {summary['stick_slip_events']} stick-slip event(s)",
-        f"final contact: {100 * summary['stick_fraction']:.1f} % stick, {100 * summary['slip_fraction']:.1f} % slip, "
-        f"{100 * summary['open_fraction']:.1f} % open of the TP contact points; normal force "
-        f"{summary['normal_force_N'] / 1e3:.2f} kN, axial friction {summary['friction_force_z_N'] / 1e3:.2f} kN",
+        (
+            f"total settlement {summary['total_settlement_mm']:.4f} mm after "
+            f"{summary['end_time_s']:.4g} s ({summary['steps']} steps), "
+            f"{summary['stick_slip_events']} stick-slip event(s)"
+        ),
+        (
+            f"final contact: {100 * summary['stick_fraction']:.1f} % stick, "
+            f"{100 * summary['slip_fraction']:.1f} % slip, "
+            f"{100 * summary['open_fraction']:.1f} % open of the TP contact points; "
+            f"normal force {summary['normal_force_N'] / 1e3:.2f} kN, "
+            f"axial friction {summary['friction_force_z_N'] / 1e3:.2f} kN"
+        ),
         "excitation frequencies: "
         + ", ".join(f"{e.frequency_Hz:.1f} Hz ({e.role})" for e in excitations),
         "=" * 78,
@@ -230,7 +237,7 @@ def write_state(model, folder: Path, name: str, k: int) -> None:
 
 
 def plot_contact_status(contact: NitscheContact, joint, path: Path, title: str) -> None:
-    """Contact status of the slave points: angle [deg] against height above the TP's lower end [mm]."""
+    """Contact status of the slave points: angle [deg] against height above the TP's end [mm]."""
     comm = contact.V.mesh.comm
     st = contact.state
     x = comm.gather(contact.slave.points, root=0)

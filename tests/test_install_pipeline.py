@@ -122,7 +122,8 @@ def test_resume_equals_uninterrupted(uninterrupted, tmp_path_factory):
     s = np.array([r["settlement_mm"] for r in resumed.history])
     print(
         f"\nresume: |u - u_ref| / |u_ref| = {relative:.2e}, history rows {len(s)} vs {len(s_ref)}, "
-        f"final settlement {again['total_settlement_mm']:.10f} vs {summary['total_settlement_mm']:.10f} mm"
+        f"final settlement {again['total_settlement_mm']:.10f} "
+        f"vs {summary['total_settlement_mm']:.10f} mm"
     )
     assert len(s) == len(s_ref)
     assert relative < 1e-8
