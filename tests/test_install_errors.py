@@ -1,5 +1,7 @@
 """Bad case files and options of the installation run give clear errors before any computation."""
 
+from pathlib import Path
+
 import pytest
 from mpi4py import MPI
 
@@ -109,6 +111,19 @@ def test_demo_rejects_bad_options_before_computing(tmp_path_factory, capsys):
         assert "no_such_case" in err
         assert "not of the form section.key=value" in err
         assert "no checkpoint" in err
-    from pathlib import Path
-
     assert not (Path(out) / "history.csv").exists()  # nothing computed
+
+
+def test_resume_needs_the_same_rank_count(tmp_path_factory):
+    import json
+
+    from solver import checkpoint
+
+    comm = MPI.COMM_WORLD
+    folder = comm.bcast(str(tmp_path_factory.mktemp("ckpt")) if comm.rank == 0 else None, root=0)
+    if comm.rank == 0:
+        manifest = {"ranks": comm.size + 1, "time_s": 0.1}
+        (Path(folder) / checkpoint.MANIFEST).write_text(json.dumps(manifest))
+    comm.barrier()
+    with pytest.raises(ValueError, match=rf"written by {comm.size + 1} rank\(s\).*not {comm.size}"):
+        checkpoint.read_manifest(folder, comm)
