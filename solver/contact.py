@@ -400,6 +400,20 @@ class NitscheContact:
         z_min = self.V.mesh.comm.allreduce(z.min() if len(z) else np.inf, op=MPI.MIN)
         return np.where(z <= z_min + height, Status.STICK, Status.OPEN).astype(np.int8)
 
+    def residual_floor(self) -> float:
+        """Round-off level of the contact residual's l2 norm at the last update [N] (all ranks).
+
+        The gap is a difference of positions of size |x|, so it carries an absolute error of
+        about eps |x| [m], which the Nitsche terms multiply by gamma w: the residual cannot be
+        reduced below about eps (sum_q (w_q gamma_q |x_q|)^2)^(1/2) over the paired points
+        (measured on the joint: the residual stagnates at 1-5 times this). Returns 10 times
+        that estimate, for use as a floor of Newton's residual tolerance.
+        """
+        paired = self.pairing.paired
+        scale = self.slave.weights[paired] * self.gamma[paired] * np.linalg.norm(self.state.coordinates[paired], axis=1)
+        total = self.V.mesh.comm.allreduce(float(scale @ scale), op=MPI.SUM)
+        return 10.0 * np.finfo(float).eps * np.sqrt(total)
+
     # -- output --------------------------------------------------------------------------
     def forces(self) -> tuple[float, npt.NDArray]:
         """Total normal force sum(w p) [N] and friction force sum(w lambda_t) (3,) [N] on the slave (all ranks)."""

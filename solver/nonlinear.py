@@ -44,6 +44,12 @@ class NewtonResult:
     timings: dict[str, float] = field(default_factory=dict)  #: wall time per phase [s]
 
 
+def _residual_floor(contact) -> float:
+    """Round-off floor of the contact residual [N] (0 for contact objects without an estimate)."""
+    estimate = getattr(contact, "residual_floor", None)
+    return estimate() if estimate is not None else 0.0
+
+
 class _SumOperator:
     """Matrix-free action of A + J (PETSc python matrix context)."""
 
@@ -61,7 +67,8 @@ class ContactNewtonSolver:
     Args:
         A: bulk matrix (with Dirichlet rows/columns), constant while this solver is used.
         bcs: Dirichlet conditions of the problem.
-        rtol, atol: convergence when ||F|| <= max(atol, rtol max(||F_0||, ||b||)) [N] ...
+        rtol, atol: convergence when ||F|| <= max(atol, rtol max(||F_0||, ||b||), floor) [N], with
+            floor the round-off level of the contact residual (``NitscheContact.residual_floor``) ...
         stol: ... or when the Newton correction ||du||_inf <= stol ||u||_inf (the residual of a
             C0 faceted master surface can stagnate at the level lambda x kink angle).
         max_iterations: Newton iteration limit.
@@ -70,6 +77,11 @@ class ContactNewtonSolver:
         krylov_rtol: relative tolerance of the GMRES correction solve.
         lu_solver: PETSc factorisation package ("mumps", "superlu_dist", "petsc").
         max_backtracks: step halvings when a Newton step increases ||F|| (0: plain Newton).
+        max_gap_change: if given [m], damp each Newton step so that no slave point's gap changes
+            by more than max(max_gap_change, |g| / 2) (g its gap at the current iterate): points
+            approach the master at most halfway per iteration and cross into penetration by
+            at most about max_gap_change. Stops the open <-> deeply penetrated cycling of a
+            body that first flies free (docs/contact.md). None: full Newton steps.
     """
 
     def __init__(
@@ -84,6 +96,7 @@ class ContactNewtonSolver:
         krylov_rtol: float = 1e-11,
         lu_solver: str = "mumps",
         max_backtracks: int = 0,
+        max_gap_change: float | None = None,
     ):
         if max_iterations < 1:
             raise ValueError(f"max_iterations must be >= 1, got {max_iterations}")
@@ -96,6 +109,9 @@ class ContactNewtonSolver:
         self.max_iterations = max_iterations
         self.refactor_after = refactor_after
         self.max_backtracks = max_backtracks
+        if max_gap_change is not None and not max_gap_change > 0:
+            raise ValueError(f"max_gap_change must be positive [m] (or None), got {max_gap_change}")
+        self.max_gap_change = max_gap_change
         rows = []
         for bc in bcs:
             dofs, _ = bc.dof_indices()
@@ -201,6 +217,14 @@ class ContactNewtonSolver:
         x.copy(x0)
         best = (np.inf, 1.0)
         alpha = 1.0
+        if self.max_gap_change is not None:
+            gap = contact.state.gap.copy()
+            x.axpy(1.0, du)
+            u.x.scatter_forward()
+            trial = self._residual(b, contact, u, F, timings)
+            alpha = self._gap_limited_step(gap, contact.state.gap)
+            if alpha == 1.0 and (trial < norm or not self.max_backtracks):
+                return trial
         for _ in range(self.max_backtracks + 1):
             x0.copy(x)
             x.axpy(alpha, du)
@@ -214,6 +238,15 @@ class ContactNewtonSolver:
         x.axpy(best[1], du)
         u.x.scatter_forward()
         return self._residual(b, contact, u, F, timings)
+
+    def _gap_limited_step(self, gap: np.ndarray, trial_gap: np.ndarray) -> float:
+        """Largest fraction (<= 1, the same on all ranks) of the step keeping each point's gap change
+        within max(max_gap_change, |g| / 2), the gap assumed linear along the step."""
+        change = np.abs(trial_gap - gap)
+        allowed = np.maximum(self.max_gap_change, 0.5 * np.abs(gap))
+        ratio = np.where(np.isfinite(change), change / allowed, 0.0)
+        worst = self._comm.allreduce(float(ratio.max()) if ratio.size else 0.0, op=MPI.MAX)
+        return 1.0 if worst <= 1.0 else 1.0 / worst
 
     def solve(self, b: PETSc.Vec, contact: NitscheContact, u: dolfinx.fem.Function) -> NewtonResult:
         """Solve A u + r_c(u) = b for u (initial guess: u on entry, Dirichlet values imposed)."""
@@ -236,7 +269,7 @@ class ContactNewtonSolver:
             if not np.isfinite(norm):
                 result = NewtonResult(False, k, norms, linear, message=f"residual is not finite at iteration {k}")
                 break
-            if norm <= max(self.atol, self.rtol * max(norms[0], b_norm)) or step_small:
+            if norm <= max(self.atol, self.rtol * max(norms[0], b_norm), _residual_floor(contact)) or step_small:
                 result = NewtonResult(True, k, norms, linear)
                 break
             if k == self.max_iterations:
