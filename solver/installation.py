@@ -408,6 +408,7 @@ def build_joint_model(comm: MPI.Comm, case: InstallationCase) -> JointModel:
         damping = ModalDamping(
             M, [u.x.petsc_vec for u in modes.modes], modes.frequencies_hz, d.zeta
         )
+        damping.check_step(case.self_weight.dt_s)  # explicit in time: fail before the time loop
     sw = case.self_weight
     static = RampedAxialForce(sw.force_N, sw.ramp_time_s)
     top = TopFaceLoad(V, mesh_data.facet_tags, tags.TP_TOP)
