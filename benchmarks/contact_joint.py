@@ -11,7 +11,7 @@ factorisations and the time per phase.
     mpirun -n 2 python benchmarks/contact_joint.py --n-circumferential 24 --steps 3
 
 With ``--self-weight T``: instead, the self-weight stage by ``solver.dynamics`` (10 kN
-ramped over T seconds on the TP top, generalised-alpha rho_inf 0.8, Rayleigh 1 % at
+ramped over T seconds on the TP top, generalised-alpha (``--rho-inf``, default 0.8), Rayleigh 1 % at
 120 Hz, steps of ``--dt``), printing Newton iterations and settlement per step.
 """
 
@@ -62,6 +62,7 @@ def main(argv=None) -> int:
     p.add_argument("--dt", type=float, default=2e-2, help="time step of the effective stiffness [s]")
     p.add_argument("--steps", type=int, default=4, help="load steps (force / steps each)")
     p.add_argument("--max-backtracks", type=int, default=0, help="Newton step halvings (line search)")
+    p.add_argument("--rho-inf", type=float, default=0.8, help="generalised-alpha spectral radius (--self-weight)")
     p.add_argument("--max-gap-change", type=float, default=None,
                    help="limit of a point's gap change per Newton iteration [m] (solver.nonlinear)")
     p.add_argument("--lagged-friction", action="store_true")
@@ -166,7 +167,7 @@ def self_weight(a, V, data, joint, material, contact) -> int:
     bcs = [dolfinx.fem.dirichletbc(np.zeros(3), clamped, V)]
     M, K = assemble_structure(V, material, bcs)
     loading = TPLoading(TopFaceLoad(V, data.facet_tags, tags.TP_TOP), static_axial=RampedAxialForce(-a.force, a.self_weight))
-    problem = Elastodynamics(V, M, K, bcs, load=loading, scheme=GeneralisedAlpha.from_spectral_radius(0.8),
+    problem = Elastodynamics(V, M, K, bcs, load=loading, scheme=GeneralisedAlpha.from_spectral_radius(a.rho_inf),
                              damping=RayleighDamping.at_frequency(0.01, 120.0), contact=contact,
                              newton_options={"max_backtracks": a.max_backtracks, "refactor_after": 0,
                                              "max_iterations": 40, "max_gap_change": a.max_gap_change})
@@ -182,6 +183,16 @@ def self_weight(a, V, data, joint, material, contact) -> int:
                   f"open/stick/slip={'/'.join(map(str, status))} N={normal:.4g} N", flush=True)
         return row
 
+    step = problem.step
+
+    def logged_step(dt):
+        result = step(dt)
+        if comm.rank == 0:
+            print(f"    step of {dt:.4g} s: converged={result.converged} iterations={result.iterations} ||F||: "
+                  + " ".join(f"{x:.1e}" for x in result.residual_norms), flush=True)
+        return result
+
+    problem.step = logged_step
     t0 = time.perf_counter()
     rows = run(problem, a.self_weight, a.dt, observers=[report], progress=False)
     wall = time.perf_counter() - t0

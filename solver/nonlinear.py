@@ -77,11 +77,12 @@ class ContactNewtonSolver:
         krylov_rtol: relative tolerance of the GMRES correction solve.
         lu_solver: PETSc factorisation package ("mumps", "superlu_dist", "petsc").
         max_backtracks: step halvings when a Newton step increases ||F|| (0: plain Newton).
-        max_gap_change: if given [m], damp each Newton step so that no slave point's gap changes
-            by more than max(max_gap_change, |g| / 2) (g its gap at the current iterate): points
-            approach the master at most halfway per iteration and cross into penetration by
-            at most about max_gap_change. Stops the open <-> deeply penetrated cycling of a
-            body that first flies free (docs/contact.md). None: full Newton steps.
+        max_gap_change: if given [m], damp each Newton step so that no slave point's gap decreases
+            by more than max(max_gap_change, g / 2) (g its gap at the current iterate): points
+            approach the master at most halfway per iteration and move into penetration by at
+            most max_gap_change per iteration (separation is not limited). Stops the open <->
+            deeply penetrated cycling of a body that first flies free (docs/contact.md).
+            None: full Newton steps.
     """
 
     def __init__(
@@ -240,11 +241,11 @@ class ContactNewtonSolver:
         return self._residual(b, contact, u, F, timings)
 
     def _gap_limited_step(self, gap: np.ndarray, trial_gap: np.ndarray) -> float:
-        """Largest fraction (<= 1, the same on all ranks) of the step keeping each point's gap change
-        within max(max_gap_change, |g| / 2), the gap assumed linear along the step."""
-        change = np.abs(trial_gap - gap)
-        allowed = np.maximum(self.max_gap_change, 0.5 * np.abs(gap))
-        ratio = np.where(np.isfinite(change), change / allowed, 0.0)
+        """Largest fraction (<= 1, the same on all ranks) of the step keeping each point's approach
+        (gap decrease) within max(max_gap_change, g / 2), the gap assumed linear along the step."""
+        approach = gap - trial_gap
+        allowed = np.maximum(self.max_gap_change, 0.5 * gap)
+        ratio = np.where(np.isfinite(approach) & (approach > 0), approach / allowed, 0.0)
         worst = self._comm.allreduce(float(ratio.max()) if ratio.size else 0.0, op=MPI.MAX)
         return 1.0 if worst <= 1.0 else 1.0 / worst
 
