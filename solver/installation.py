@@ -74,11 +74,12 @@ class ContactSettings:
     slave: str = "TP_CONTACT"
     master: str = "MP_CONTACT"
     gamma0: float = 10.0  #: Nitsche parameter [-]
-    theta: int = 1  #: 1 symmetric (needed by the modal stage)
+    theta: int = 1  #: 1 symmetric, 0 non-symmetric, -1 skew (the modal stage always uses 1)
     lagged_friction: bool = False
     degree: int = 2  #: Lagrange degree of the displacement
     max_iterations: int = 30  #: Newton iterations per step before the step is cut
     max_backtracks: int = 6  #: Newton line-search halvings (solver.nonlinear.ContactNewtonSolver)
+    max_gap_change: float = 0.0  #: gap-limited Newton steps [m] (ContactNewtonSolver); 0: off
 
     def __post_init__(self) -> None:
         if not (isinstance(self.max_iterations, int) and self.max_iterations >= 1):
@@ -91,10 +92,9 @@ class ContactSettings:
             raise ValueError(f"slave and master must differ, got {self.slave} for both")
         if not self.gamma0 > 0:
             raise ValueError(f"gamma0 must be positive, got {self.gamma0}")
-        if self.theta != 1:
-            raise ValueError(
-                f"theta must be 1 (the modal stage needs the symmetric tangent), got {self.theta}"
-            )
+        _check_choice("theta", self.theta, (1, 0, -1))
+        if not self.max_gap_change >= 0:
+            raise ValueError(f"max_gap_change must be >= 0 m, got {self.max_gap_change}")
         _check_choice("degree", self.degree, (1, 2, 3))
 
 
@@ -424,6 +424,7 @@ def build_joint_model(comm: MPI.Comm, case: InstallationCase) -> JointModel:
         newton_options={
             "max_iterations": case.contact.max_iterations,
             "max_backtracks": case.contact.max_backtracks,
+            "max_gap_change": case.contact.max_gap_change or None,
         },
     )
     problem.initialise(0.0)
@@ -737,11 +738,31 @@ class Installation:
             stages = self.case.schedule.with_natural_frequencies(self.natural_frequencies).stages
         return Schedule(stages, start_s=start_s)
 
+    def _symmetric_contact(self) -> NitscheContact:
+        """The run's contact, or (theta != 1) a symmetric copy paired at the current displacement:
+        the modal stage needs a symmetric interface tangent (same slave points, same status)."""
+        contact, c = self.model.contact, self.case.contact
+        if contact.theta == 1:
+            return contact
+        tags_ = self.model.mesh_data.facet_tags
+        symmetric = NitscheContact(
+            self.model.V,
+            tags_,
+            getattr(tags, c.slave),
+            getattr(tags, c.master),
+            self.case.material,
+            self.case.friction,
+            gamma0=c.gamma0,
+            theta=1,
+        )
+        symmetric.update(self.model.problem.u)
+        return symmetric
+
     def _modal_stage(self) -> None:
         """Modes of the settled joint (contact tangent at its current status); frequency choice."""
         model, vib = self.model, self.case.vibration
         t0 = time.perf_counter()
-        interface = ContactInterface(model.contact, model.contact.state.status)
+        interface = ContactInterface(self._symmetric_contact(), model.contact.state.status)
         result = modal_analysis(
             model.V, self.case.material, model.bcs, [interface], EigenOptions(n_modes=vib.n_modes)
         )
