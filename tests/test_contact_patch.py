@@ -21,9 +21,11 @@ pytestmark = pytest.mark.mpi
 
 
 @pytest.mark.parametrize("degree", [1, 2])
-@pytest.mark.parametrize("theta", [1, 0, -1])
+# small gamma0 only for theta = 0, -1: the symmetric variant is not stable for it (with
+# theta = 1, gamma0 = 1 Newton does not converge on the P2 blocks)
+@pytest.mark.parametrize("theta, gamma0", [(1, 10.0), (0, 10.0), (-1, 10.0), (0, 1.0), (-1, 1.0)])
 @pytest.mark.parametrize("mu", [0.0, 0.5])
-def test_uniform_pressure(degree, theta, mu):
+def test_uniform_pressure(degree, theta, mu, gamma0):
     mesh, _, tags = two_blocks(MPI.COMM_WORLD, lower=(3, 3, 2), upper=(4, 5, 2))
     V = dolfinx.fem.functionspace(mesh, ("Lagrange", degree, (3,)))
     material = Material(E=1e9, nu=0.3)
@@ -35,7 +37,7 @@ def test_uniform_pressure(degree, theta, mu):
         fixed(V, 2, lambda x: np.isclose(x[2], 0.5), -delta),
     ]
     A, b = elastic_system(V, material, bcs)
-    contact = NitscheContact(V, tags, SLAVE, MASTER, material, FrictionLaw(mu, mu, 0.0), gamma0=10.0, theta=theta)
+    contact = NitscheContact(V, tags, SLAVE, MASTER, material, FrictionLaw(mu, mu, 0.0), gamma0=gamma0, theta=theta)
     u = dolfinx.fem.Function(V)
     result = solve_contact_problem(A, b, contact, u, bcs)
     assert result.converged, result.message
