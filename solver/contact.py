@@ -282,9 +282,9 @@ class NitscheContact:
         b.assemblyEnd()
         return b
 
-    def _tangent_rows(self, idx, Sn, St, G, D, normal_tied, stick, slip, consistent: bool):
+    def _tangent_rows(self, idx, Sn, St, G, D, normal_tied, stick, slip, consistent: bool, gamma=None):
         """d lambda_n (q, ndof), d lambda_t (q, 3, ndof) and the tied-point mask for the given states."""
-        gam = self.gamma[idx]
+        gam = (self.gamma if gamma is None else gamma)[idx]
         Bn = Sn + gam[:, None] * G
         Bt = St - gam[:, None, None] * D
         dlam_n = np.where(normal_tied[:, None], Bn, 0.0)  # (tied points only are used)
@@ -307,14 +307,15 @@ class NitscheContact:
             dlam_t[s] = d + q[:, :, None] * d_radius[:, None, :]
         return dlam_n, dlam_t, normal_tied
 
-    def _assemble_matrix(self, tangent) -> PETSc.Mat:
+    def _assemble_matrix(self, tangent, theta: int | None = None, gamma=None) -> PETSc.Mat:
         """Assemble sum_q w (-theta/gamma (Sn Sn + St St) + 1/gamma (A_n dlam_n + A_t^T dlam_t)).
 
         The slave-only Nitsche term is summed per slave facet, the tie terms (only at points
         whose normal is tied) per (slave facet, master facet) pair, before the COO insertion
         (PETSc sums the remaining duplicates, also across ranks).
         """
-        th = self.theta
+        th = self.theta if theta is None else theta
+        gamma = self.gamma if gamma is None else gamma
         nq = self.slave.points_per_facet
         nsd = self.slave.values.shape[1] * self.slave.gdim
         rows, cols, vals = [], [], []
@@ -334,7 +335,7 @@ class NitscheContact:
         for idx in self._chunks():
             Sn, St, G, D = self._operators(idx)
             dlam_n, dlam_t, tied = tangent(idx, Sn, St, G, D)
-            gam = self.gamma[idx]
+            gam = gamma[idx]
             w = (self.slave.weights[idx] / gam)[:, None, None]
             slave_facet = idx // nq
             if th != 0:
@@ -371,7 +372,8 @@ class NitscheContact:
             )
         )
 
-    def interface_stiffness(self, status: npt.NDArray | Status) -> PETSc.Mat:
+    def interface_stiffness(self, status: npt.NDArray | Status, theta: int | None = None,
+                            gamma0: float | None = None) -> PETSc.Mat:
         """Linear interface tangent for a given per-point status (this rank's slave points) [N/m].
 
         STICK ties normal and tangential relative motion, SLIP the normal motion only, OPEN
@@ -379,7 +381,16 @@ class NitscheContact:
         remains at every paired point, as in the nonlinear operator). Uses the pairing of the
         last ``update`` (the reference configuration if none). Add to the bulk stiffness with
         ``K.axpy(1, S, PETSc.Mat.Structure.DIFFERENT_NONZERO_PATTERN)``.
+
+        ``theta``/``gamma0`` (default: this object's) assemble the tangent of another Nitsche
+        variant at the same pairing, e.g. the symmetric theta = 1 with a large gamma0 for a
+        modal analysis while the time stepping uses theta = -1 with a small gamma0.
         """
+        if theta is not None and theta not in (1, 0, -1):
+            raise ValueError(f"theta must be 1 (symmetric), 0 (non-symmetric) or -1 (skew), got {theta}")
+        if gamma0 is not None and not gamma0 > 0:
+            raise ValueError(f"Nitsche parameter gamma0 must be positive, got {gamma0}")
+        gamma = None if gamma0 is None else gamma0 * self.material.E / self.slave.h
         status = np.broadcast_to(np.asarray(status, dtype=np.int8), (self.slave.num_points,))
         if not np.isin(status, list(Status)).all():
             raise ValueError("status values must be Status.OPEN, Status.STICK or Status.SLIP")
@@ -387,8 +398,10 @@ class NitscheContact:
         stick = status == Status.STICK
         return self._assemble_matrix(
             lambda idx, Sn, St, G, D: self._tangent_rows(
-                idx, Sn, St, G, D, tied[idx], stick[idx], np.zeros(len(idx), bool), consistent=False
-            )
+                idx, Sn, St, G, D, tied[idx], stick[idx], np.zeros(len(idx), bool), consistent=False, gamma=gamma
+            ),
+            theta=theta,
+            gamma=gamma,
         )
 
     def band_status(self, height: float, axis: int = 2) -> npt.NDArray:

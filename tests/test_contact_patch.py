@@ -6,6 +6,7 @@ contact pressure is uniform, p = E delta / (H_base + H_block), for any friction.
 """
 
 from mpi4py import MPI
+from petsc4py import PETSc
 
 import numpy as np
 import pytest
@@ -50,3 +51,23 @@ def test_uniform_pressure(degree, theta, mu, gamma0):
     normal_force, friction_force = contact.forces()
     assert normal_force == pytest.approx(p_exact * 1.0, rel=1e-2)
     assert np.allclose(friction_force, 0.0, atol=1e-6 * normal_force)
+
+
+def test_interface_stiffness_of_another_variant():
+    """interface_stiffness(status, theta, gamma0) of a (theta = -1, gamma0 = 1) contact equals the
+    tangent of a contact built with that theta and gamma0 (same pairing)."""
+    mesh, _, tags = two_blocks(MPI.COMM_WORLD, lower=(3, 3, 2), upper=(4, 5, 2))
+    V = dolfinx.fem.functionspace(mesh, ("Lagrange", 2, (3,)))
+    material = Material(E=1e9, nu=0.3)
+    stepping = NitscheContact(V, tags, SLAVE, MASTER, material, FrictionLaw(0.5, 0.5, 0.0), gamma0=1.0, theta=-1)
+    modal = NitscheContact(V, tags, SLAVE, MASTER, material, FrictionLaw(0.5, 0.5, 0.0), gamma0=30.0, theta=1)
+    S = stepping.interface_stiffness(Status.STICK, theta=1, gamma0=30.0)
+    S_ref = modal.interface_stiffness(Status.STICK)
+    S_own = stepping.interface_stiffness(Status.STICK)
+    norm = S_ref.norm()
+    S.axpy(-1.0, S_ref, structure=PETSc.Mat.Structure.DIFFERENT_NONZERO_PATTERN)
+    S_own.axpy(-1.0, S_ref, structure=PETSc.Mat.Structure.DIFFERENT_NONZERO_PATTERN)
+    assert S.norm() < 1e-12 * norm
+    assert S_own.norm() > 1e-3 * norm  # the variant arguments do change the tangent
+    with pytest.raises(ValueError, match="theta"):
+        stepping.interface_stiffness(Status.STICK, theta=2)
