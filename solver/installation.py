@@ -467,7 +467,8 @@ def choose_frequencies(records: list[ModeRecord], settings: VibrationSettings) -
       (one per degenerate pair);
     * the lowest (m = 2, n = 1) mode if not among them (SPEC 5.4: the most effective);
     * a control frequency: the point between the lowest and highest chosen natural
-      frequency farthest from every computed natural frequency.
+      frequency farthest from every computed natural frequency (with a single chosen
+      frequency f: between f/2 and min(1.5 f, max_frequency_hz)).
     Stages are returned in increasing frequency after the lead-in.
     """
     candidates = [r for r in records if r.frequency_Hz <= settings.max_frequency_hz]
@@ -512,7 +513,7 @@ def choose_frequencies(records: list[ModeRecord], settings: VibrationSettings) -
         natural = np.array([r.frequency_Hz for r in records])
         lo, hi = chosen[0].frequency_Hz, chosen[-1].frequency_Hz
         if hi - lo < 1e-6 * hi:
-            lo, hi = 0.5 * lo, 1.5 * hi
+            lo, hi = 0.5 * lo, min(1.5 * hi, settings.max_frequency_hz)
         grid = np.linspace(lo, hi, 2001)
         distance = np.min(np.abs(grid[:, None] - natural[None, :]), axis=1)
         f_c = float(grid[np.argmax(distance)])

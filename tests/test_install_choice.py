@@ -1,0 +1,58 @@
+"""Choice of the excitation frequencies from a mode ranking (no finite elements involved)."""
+
+import numpy as np
+import pytest
+
+from solver.installation import VibrationSettings, choose_frequencies
+from solver.modal_report import ModeRecord
+
+pytestmark = pytest.mark.mpi
+
+
+def _record(mode: int, f: float, m: int, n: int, rank: int) -> ModeRecord:
+    return ModeRecord(
+        mode, f, m, n, "TP", m, n, m, n, 1.0, 1.0, 0, 0, 0, 0, 0, 1.0 / rank, 0.0, rank
+    )
+
+
+# the experiments' modes (SPEC 5.9) with a made-up ranking; 86 Hz is a degenerate pair
+RECORDS = [
+    _record(1, 50.0, 1, 0, 3),
+    _record(2, 86.0, 3, 0, 2),
+    _record(3, 86.0, 3, 0, 2),
+    _record(4, 106.0, 4, 0, 4),
+    _record(5, 120.0, 2, 1, 5),
+    _record(6, 150.0, 1, 1, 1),
+    _record(7, 400.0, 2, 2, 1),
+]
+
+
+def test_best_ranks_plus_m2n1_plus_control():
+    chosen = choose_frequencies(RECORDS, VibrationSettings(n_frequencies=2, max_frequency_hz=300.0))
+    roles = [e.role for e in chosen]
+    assert roles[:2] == ["lead-in", "lead-in"] and [e.frequency_Hz for e in chosen[:2]] == [
+        68.0,
+        100.0,
+    ]
+    modal = [e for e in chosen if e.role == "modal"]
+    # ranks 1 and 2 below 300 Hz (400 Hz excluded; the 86 Hz pair counted once), then (2, 1)
+    assert sorted(e.frequency_Hz for e in modal) == [86.0, 120.0, 150.0]
+    assert "m = 2, n = 1" in next(e for e in modal if e.frequency_Hz == 120.0).reason
+    (control,) = [e for e in chosen if e.role == "control"]
+    natural = np.array([r.frequency_Hz for r in RECORDS])
+    assert 86.0 <= control.frequency_Hz <= 150.0
+    # farthest point from all natural frequencies in [86, 150]: midway between 120 and 150
+    assert control.frequency_Hz == pytest.approx(135.0, abs=0.05)
+    assert np.min(np.abs(natural - control.frequency_Hz)) == pytest.approx(15.0, abs=0.05)
+    assert all(e.amplitude_N == 3600.0 for e in chosen if e.role != "lead-in")
+    assert all(e.reason for e in chosen)
+
+
+def test_single_frequency_control_stays_below_the_limit():
+    records = [_record(1, 233.0, 0, 0, 1)]
+    chosen = choose_frequencies(
+        records, VibrationSettings(n_frequencies=1, lead_in_hz=(), max_frequency_hz=300.0)
+    )
+    control = next(e for e in chosen if e.role == "control")
+    assert 0.5 * 233.0 <= control.frequency_Hz <= 300.0
+    assert [e.role for e in chosen] == ["control", "modal"]  # increasing frequency
