@@ -115,7 +115,7 @@ def test_case_file_errors(tmp_path):
 
 def test_ignores_other_sections(tmp_path):
     path = tmp_path / "case.toml"
-    path.write_text((CASES / "scaled.toml").read_text() + "\n[friction]\nmu_s = 0.5\n")
+    path.write_text((CASES / "scaled.toml").read_text() + "\n[post_processing]\nformat = \"vtx\"\n")
     joint, material, options = load_geometry(path)
     assert material == Material(E=210e9, nu=0.3, rho=7850.0)
     assert options == MeshOptions()
