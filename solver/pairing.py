@@ -88,6 +88,8 @@ class _CellElements:
 
     def tabulate(self, element: basix.finite_element.FiniteElement, X: npt.NDArray, nderiv: int):
         """Values and reference gradients of all cell basis functions, shape (1+tdim, npts, ndofs)."""
+        if len(X) == 0:  # a rank without points: basix built with assertions (Debian) aborts on none
+            return np.zeros((1 + self.tdim if nderiv else 1, 0, element.dim))
         tab = element.tabulate(nderiv, X)[..., 0]
         return tab[: 1 + self.tdim] if nderiv else tab
 
