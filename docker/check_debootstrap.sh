@@ -23,7 +23,7 @@ here=$(cd "$(dirname "${BASH_SOURCE[0]}")" && pwd)
 root=/var/tmp/slipjoint-sid
 source_dir=$(cd "$here/.." && pwd)
 suite=sid
-mirror=http://deb.debian.org/debian
+mirror=  # default: the Debian archive of the host's apt sources (debootstrap_base.sh)
 run_demo=false
 ctest_args=()
 
