@@ -156,6 +156,11 @@ def main(argv: list[str] | None = None) -> int:
         if comm.rank == 0:
             print(f"error: {e}", file=sys.stderr)
         return 2
+    except RuntimeError as e:  # the time loop gave up (Newton failed at the minimum step)
+        if comm.rank == 0:
+            print(f"\nrun stopped: {e}\nresults up to this point are in {args.output} "
+                  "(history.csv, stages.csv)", file=sys.stderr)
+        return 1
     return 0
 
 
