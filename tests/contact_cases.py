@@ -169,14 +169,26 @@ def gathered(comm: MPI.Comm, a):
 
 
 def sliding_block(
-    comm: MPI.Comm, friction, steps: int, slide_per_step: float, dt: float | None, theta: int = 1, lagged: bool = False, **newton
+    comm: MPI.Comm,
+    friction,
+    steps: int,
+    slide_per_step: float,
+    dt: float | None,
+    theta: int = 1,
+    lagged: bool = False,
+    rigid_base: bool = False,
+    contact_type=None,
+    **newton,
 ):
     """Block (0.5 x 0.5 x 0.25 m) pressed on a clamped base by q = 1 MPa and dragged by its top face.
 
     The top face's x displacement grows by ``slide_per_step`` [m] per step (u_y = 0 there),
-    the rest of the top face is loaded by the pressure. Returns (history, contact, solver
-    results, u) with history rows (T / N, stick fraction, slip fraction) where T is the
-    horizontal reaction of the top face (from the bulk stress) and N = q A the normal load.
+    the rest of the top face is loaded by the pressure. The base is clamped on its bottom
+    face, or with ``rigid_base`` at all its dofs (its top face, the master surface, then
+    cannot move or rotate). ``contact_type`` (default NitscheContact) lets a test use a
+    subclass of it with the same arguments. Returns (history, contact, solver results, u)
+    with history rows (T / N, stick fraction, slip fraction) where T is the horizontal
+    reaction of the top face (from the bulk stress) and N = q A the normal load.
     """
     import ufl
     from petsc4py import PETSc
@@ -187,7 +199,7 @@ def sliding_block(
     from solver.nonlinear import ContactNewtonSolver
 
     H, q = 0.25, 1e6
-    mesh, _, tags = two_blocks(comm, heights=(H, H), lower=(4, 4, 2), upper=(3, 3, 2), inset=0.25)
+    mesh, cell_tags, tags = two_blocks(comm, heights=(H, H), lower=(4, 4, 2), upper=(3, 3, 2), inset=0.25)
     V = dolfinx.fem.functionspace(mesh, ("Lagrange", 1, (3,)))
     material = Material(E=1e9, nu=0.3)
     top = dolfinx.mesh.locate_entities_boundary(mesh, 2, lambda x: np.isclose(x[2], H))
@@ -196,6 +208,9 @@ def sliding_block(
     top_x = dolfinx.fem.locate_dofs_topological(V.sub(0), 2, top)
     bcs = [fixed(V, c, lambda x: np.isclose(x[2], -H)) for c in range(3)]
     bcs += [fixed(V, 1, lambda x: np.isclose(x[2], H)), dolfinx.fem.dirichletbc(drag, top_x, V.sub(0))]
+    if rigid_base:
+        base = dolfinx.fem.locate_dofs_topological(V, 3, cell_tags.find(LOWER))
+        bcs.append(dolfinx.fem.dirichletbc(np.zeros(3), base, V))
     u_, v_ = ufl.TrialFunction(V), ufl.TestFunction(V)
     a = dolfinx.fem.form(ufl.inner(sigma(u_, material), epsilon(v_)) * ufl.dx)
     load = dolfinx.fem.Constant(mesh, np.array([0.0, 0.0, -q]))
@@ -205,7 +220,7 @@ def sliding_block(
     u, u_old = dolfinx.fem.Function(V), dolfinx.fem.Function(V)
     reaction = dolfinx.fem.form(ufl.inner(sigma(u, material), epsilon(v_)) * ufl.dx)
     owned_x = top_x[top_x < V.dofmap.index_map.size_local * 3]
-    contact = NitscheContact(V, tags, SLAVE, MASTER, material, friction, gamma0=10.0, theta=theta, lagged_friction=lagged)
+    contact = (contact_type or NitscheContact)(V, tags, SLAVE, MASTER, material, friction, gamma0=10.0, theta=theta, lagged_friction=lagged)
     solver = ContactNewtonSolver(A, bcs, **({"max_iterations": 40, "refactor_after": 0} | newton))
     N = q * 0.5 * 0.5
     history, results = [], []

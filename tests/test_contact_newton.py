@@ -8,6 +8,12 @@ differences to truncation error in the block's rows, including slip and the d mu
 term of the velocity law (the base's rows carry the dropped shift of the master basis
 functions with the projection point). At the real sliding state, with the base deformed and perturbed too, the
 dropped terms appear, with a relative size of the order of the interface strain p / E.
+
+Convergence rate: on a deformable base Newton ends linearly with a contraction of order
+p / E (the dropped terms). On a rigid base (all base dofs clamped, so the master surface can
+neither move nor rotate) nothing is dropped, and once the stick/slip/open sets settle the
+residual must fall quadratically, ||F_k+1|| <= C ||F_k||^2, down to round-off; without the
+d mu / d|v| term of the velocity law the same case converges only linearly (control).
 """
 
 from mpi4py import MPI
@@ -16,8 +22,8 @@ import numpy as np
 import pytest
 
 import dolfinx
-from contact_cases import sliding_block
-from solver.contact import Status
+from contact_cases import gathered, sliding_block
+from solver.contact import NitscheContact, Status
 from solver.friction import FrictionLaw
 
 pytestmark = pytest.mark.mpi
@@ -110,3 +116,71 @@ def test_convergence_rate(sliding_state):
     assert results[-1].converged and results[-1].iterations <= 12
     rates = norms[-2:] / norms[-3:-1]
     assert np.all(rates < 1e-2), rates
+
+
+class _RecordedContact(NitscheContact):
+    """NitscheContact that keeps the stick/slip/open status (all ranks) of every update and
+    reports no round-off floor, so that Newton iterates on into its round-off stagnation,
+    whose level is then measured."""
+
+    def update(self, u):
+        super().update(u)
+        self.__dict__.setdefault("statuses", []).append(gathered(self.V.mesh.comm, self.state.status))
+
+    def residual_floor(self) -> float:
+        return 0.0
+
+
+class _WithoutSlope(FrictionLaw):
+    """The velocity law with its derivative d mu / d|v| reported as zero (an inconsistent Jacobian)."""
+
+    def derivative(self, slip_speed):
+        return np.zeros_like(np.asarray(slip_speed, dtype=float))
+
+
+def _rigid_base_step(theta: int, friction: FrictionLaw) -> tuple[np.ndarray, list[np.ndarray]]:
+    """Residual norms [N] and statuses of every iterate of the last of 6 sliding steps on a rigid base.
+
+    Slip of 0.2 mm per 20 ms step (v = 1e-2 m/s, d_c |v| = 1 with d_c = 100 s/m: mu' v / mu = -8 %),
+    exact Newton (fresh LU at every iteration), no convergence test (12 iterations).
+    """
+    _, contact, results, _ = sliding_block(
+        MPI.COMM_WORLD, friction, steps=6, slide_per_step=2e-4, dt=0.02, theta=theta, rigid_base=True,
+        contact_type=_RecordedContact, rtol=1e-30, atol=0.0, stol=0.0, max_iterations=12,
+    )
+    norms = np.array(results[-1].residual_norms)
+    return norms, contact.statuses[-len(norms):]
+
+
+def _settled(norms: np.ndarray, statuses: list[np.ndarray], roundoff: float) -> np.ndarray:
+    """The norms from the last change of the stick/slip/open sets on, up to the last one above ``roundoff``."""
+    changes = [k for k in range(1, len(statuses)) if np.any(statuses[k] != statuses[k - 1])]
+    F = norms[changes[-1] if changes else 0 :]
+    return F[: np.argmax(F <= roundoff)] if np.any(F <= roundoff) else F
+
+
+def _orders(F: np.ndarray) -> np.ndarray:
+    """Estimated convergence orders log(F_k+1 / F_k) / log(F_k / F_k-1)."""
+    return np.log(F[2:] / F[1:-1]) / np.log(F[1:-1] / F[:-2])
+
+
+@pytest.mark.parametrize("theta", [1, -1])
+def test_quadratic_rate_on_rigid_base(theta):
+    """Sliding with mu(v) on a clamped base: sets settle, then ||F|| falls quadratically to round-off."""
+    norms, statuses = _rigid_base_step(theta, FrictionLaw(mu_s=0.5, mu_d=0.4, d_c=100.0))
+    assert np.all(statuses[-1][statuses[-1] != Status.OPEN] == Status.SLIP)  # gross sliding
+    noise = norms[-4:].max()  # the stagnated tail
+    assert noise < 1e-13 * norms[0], norms
+    F = _settled(norms, statuses, roundoff=2 * noise)
+    assert len(F) >= 3, (norms, noise)  # at least two steps with a fixed active set above round-off
+    assert _orders(F)[-1] >= 1.8, (F, _orders(F))
+    # ||F_k+1|| <= C ||F_k||^2 with C = 10 / ||F_0|| at every settled iterate
+    assert np.all(F[1:] * norms[0] / F[:-1] ** 2 <= 10.0), F
+
+
+def test_linear_rate_without_velocity_slope():
+    """Control: the same step with d mu / d|v| left out of the Jacobian converges only linearly."""
+    norms, statuses = _rigid_base_step(1, _WithoutSlope(mu_s=0.5, mu_d=0.4, d_c=100.0))
+    F = _settled(norms, statuses, roundoff=0.0)
+    assert len(F) >= 5, norms
+    assert np.all(np.abs(_orders(F)[-3:] - 1.0) < 0.2), (F, _orders(F))
