@@ -53,16 +53,25 @@ class _PartEntities:
     inner_cone: list[int]
 
 
-def _add_part(part: ConePart, z0: float, options: MeshOptions) -> _PartEntities:
+def _add_part(
+    part: ConePart, z0: float, options: MeshOptions, zone: tuple[float, float] | None = None
+) -> _PartEntities:
     """Add one part, lower end at global height ``z0`` [m], to the current gmsh model (geo).
 
     Each wall layer is its own profile surface, so every node of the mesh lies on a
     geometric surface of revolution and second-order nodes land on exact circles
     also inside the wall (a single surface split into layers would leave the
-    interior mid-edge nodes on chords).
+    interior mid-edge nodes on chords). ``zone`` = (z_low, z_high) [m, global]: the
+    part of the cone inside is meshed with ``options.contact_axial_size``.
     """
     geo = gmsh.model.geo
-    heights = part.profile_heights()
+    heights = list(part.profile_heights())
+    if zone is not None:
+        for z in zone:
+            h = z - z0
+            if part.cone_bottom_z < h < part.cone_top_z and min(abs(h - x) for x in heights) > 1e-9:
+                heights.append(h)
+        heights.sort()
     n_layers = options.n_layers
     # points[j][h]: layer interface j (0 = inner surface, n_layers = outer) at height h
     points = [
@@ -81,11 +90,16 @@ def _add_part(part: ConePart, z0: float, options: MeshOptions) -> _PartEntities:
 
     profile, is_cone, layer_of = [], [], []
     for k in range(len(heights) - 1):
-        n = options.n_axial(heights[k + 1] - heights[k]) + 1
+        mid = 0.5 * (heights[k] + heights[k + 1])
+        in_zone = (
+            zone is not None
+            and zone[0] <= z0 + mid <= zone[1]
+            and part.cone_bottom_z <= mid <= part.cone_top_z
+        )
+        n = options.n_axial(heights[k + 1] - heights[k], in_zone) + 1
         axial = [geo.addLine(points[j][k], points[j][k + 1]) for j in range(n_layers + 1)]
         for line in axial:
             geo.mesh.setTransfiniteCurve(line, n)
-        mid = 0.5 * (heights[k] + heights[k + 1])
         for j in range(n_layers):
             loop = geo.addCurveLoop([radial[j][k], axial[j + 1], -radial[j][k + 1], -axial[j]])
             surface = geo.addPlaneSurface([loop])
@@ -181,8 +195,11 @@ def build_joint_model(
     imperfections = check_imperfections(imperfections)
     if tp_z is None:
         tp_z = tp_placement(joint, imperfections)
-    mp = _add_part(joint.mp, 0.0, options)
-    tp = _add_part(joint.tp, tp_z, options)
+    zone = None
+    if options.contact_axial_size > 0:
+        zone = (tp_z - options.contact_zone_below, tp_z + options.contact_zone_above)
+    mp = _add_part(joint.mp, 0.0, options, zone)
+    tp = _add_part(joint.tp, tp_z, options, zone)
     _close_revolutions()
     groups = {
         tags.MP_VOLUME: (3, mp.volumes),

@@ -277,12 +277,21 @@ class MeshOptions:
     ``n_circumferential`` elements around (a multiple of 4), elements of about
     ``axial_size`` m along the axis, ``n_layers`` through the wall, and gmsh
     geometry order ``geometry_order`` (2: hex27 with curved edges).
+
+    Contact zone: with ``contact_axial_size`` > 0 [m], the cone walls of both parts
+    between ``contact_zone_below`` m below and ``contact_zone_above`` m above the TP's
+    lower edge (at placement) get elements of that axial size. The contact band grows
+    from the TP edge by about settlement x tan(beta) / (tan(alpha) - tan(beta)) (20 x the
+    settlement for the scaled joint), so it is only resolved by a fine axial mesh there.
     """
 
     n_circumferential: int = 48
     axial_size: float = 0.08
     n_layers: int = 1
     geometry_order: int = 2
+    contact_axial_size: float = 0.0  #: axial element size in the contact zone [m]; 0: axial_size
+    contact_zone_below: float = 0.03  #: contact zone below the TP's lower edge (on the MP) [m]
+    contact_zone_above: float = 0.15  #: contact zone above the TP's lower edge [m]
 
     def __post_init__(self) -> None:
         n = self.n_circumferential
@@ -296,15 +305,23 @@ class MeshOptions:
             raise ValueError(f"n_layers must be an integer >= 1, got {self.n_layers!r}")
         if self.geometry_order not in (1, 2):  # DOLFINx reads gmsh hexahedra up to hex27
             raise ValueError(f"geometry_order must be 1 or 2, got {self.geometry_order!r}")
+        if not self.contact_axial_size >= 0:
+            raise ValueError(f"contact_axial_size must be >= 0 m, got {self.contact_axial_size}")
+        if not (self.contact_zone_below >= 0 and self.contact_zone_above > 0):
+            raise ValueError(
+                "contact zone must have contact_zone_below >= 0 and contact_zone_above > 0 m, "
+                f"got {self.contact_zone_below} and {self.contact_zone_above}"
+            )
 
     @classmethod
     def from_dict(cls, data: dict[str, Any]) -> MeshOptions:
         """Build from a plain dict (the ``[mesh]`` TOML table)."""
         return construct(cls, data, "mesh")
 
-    def n_axial(self, length: float) -> int:
+    def n_axial(self, length: float, in_contact_zone: bool = False) -> int:
         """Number of elements along an axial segment of ``length`` m."""
-        return max(1, math.ceil(length / self.axial_size - 1e-9))
+        size = self.contact_axial_size if in_contact_zone and self.contact_axial_size > 0 else self.axial_size
+        return max(1, math.ceil(length / size - 1e-9))
 
 
 def material_from_dict(data: dict[str, Any]) -> Material:

@@ -257,3 +257,45 @@ def test_full_scale_mesh():
     assert z_tp == pytest.approx(joint.first_contact_height, abs=1e-9)
     for tag, count in structured_counts(joint, options).items():
         assert owned_count(md, 3 if tag in (tags.MP_VOLUME, tags.TP_VOLUME) else 2, tag) == count
+
+
+def test_contact_zone_refinement(scaled):
+    """contact_axial_size: the cone walls within the zone around the TP's lower edge get
+    elements of at most that axial size (both parts), the rest keeps axial_size; the walls'
+    generators are straight, so volumes and contact areas equal the unrefined mesh's (to the
+    quadrature error of the curved cells, 4e-8)."""
+    size, below, above = 0.01, 0.03, 0.15
+    options = MeshOptions(
+        n_circumferential=8,
+        axial_size=0.25,
+        contact_axial_size=size,
+        contact_zone_below=below,
+        contact_zone_above=above,
+    )
+    md = create_joint_mesh(COMM, scaled, options)
+    coarse = create_joint_mesh(COMM, scaled, MeshOptions(n_circumferential=8, axial_size=0.25))
+    for measure, tag in (("dx", tags.MP_VOLUME), ("dx", tags.TP_VOLUME),
+                         ("ds", tags.MP_CONTACT), ("ds", tags.TP_CONTACT)):
+        assert integrate(md, measure, tag) == pytest.approx(integrate(coarse, measure, tag), rel=1e-6)
+    # axial extent of each contact facet
+    mesh = md.mesh
+    z_edge = scaled.tp_offset
+    for tag in (tags.MP_CONTACT, tags.TP_CONTACT):
+        facets = md.facet_tags.find(tag)
+        facets = facets[facets < mesh.topology.index_map(2).size_local]
+        nodes = dolfinx.mesh.entities_to_geometry(mesh, 2, facets)
+        z = mesh.geometry.x[nodes[:, :4]][:, :, 2]  # the corners (higher-order nodes follow)
+        height, mid = z.max(axis=1) - z.min(axis=1), 0.5 * (z.max(axis=1) + z.min(axis=1))
+        inside = (mid > z_edge - below) & (mid < z_edge + above)
+        fine = COMM.allreduce(int(np.count_nonzero(inside)))
+        assert fine >= 8 * (above / size if tag == tags.TP_CONTACT else (above + below) / size) - 8
+        assert np.all(height[inside] <= size * (1 + 1e-9))
+        assert np.all(height[~inside] > size)
+    assert owned_count(md, 3, tags.TP_VOLUME) > owned_count(coarse, 3, tags.TP_VOLUME) + 8 * 10
+
+
+def test_contact_zone_options_are_checked():
+    with pytest.raises(ValueError, match="contact_axial_size"):
+        MeshOptions(contact_axial_size=-0.01)
+    with pytest.raises(ValueError, match="contact zone"):
+        MeshOptions(contact_axial_size=0.01, contact_zone_above=0.0)
