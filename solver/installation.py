@@ -13,7 +13,10 @@ Stages of :class:`Installation`:
 4. the report (``solver.report``): settlement per stage, stick-slip events, contact status.
 
 Settlement is ``solver.dynamics.Settlement``: the axial slide [mm] of the TP's lower edge
-relative to the MP wall beside it, positive down. All settings come from a case file
+relative to the MP wall beside it, positive down. After the self-weight stage the static axial
+force may follow a piecewise-linear history (``[static_force]``, e.g. a dismount pull), and the
+cones may carry radial imperfections (``[imperfections.mp]``, ``[imperfections.tp]``: ovality or
+a measured map/scan file, ``geometry.imperfections``). All settings come from a case file
 (tables below the geometry ones), checked as a whole by :meth:`InstallationCase.from_dict`
 before anything is computed. SI units; frequencies in Hz, forces in N.
 """
@@ -24,7 +27,7 @@ import json
 import math
 import time
 from collections.abc import Callable
-from dataclasses import asdict, dataclass, field
+from dataclasses import asdict, dataclass, field, replace
 from pathlib import Path
 from typing import Any
 
@@ -35,6 +38,8 @@ from dolfinx import fem
 from mpi4py import MPI
 
 from geometry import tags
+from geometry.contact_map import tp_placement
+from geometry.imperfections import RadialDeviation, ovality, read_imperfection
 from geometry.mesh import create_joint_mesh
 from geometry.parameters import JointGeometry, MeshOptions, geometry_from_case
 from solver import checkpoint, report
@@ -45,6 +50,7 @@ from solver.dynamics import Elastodynamics, Settlement, StepResult, assemble_str
 from solver.elasticity import Material
 from solver.friction import FrictionLaw
 from solver.loads import (
+    PiecewiseLinearForce,
     PointLoad,
     RampedAxialForce,
     Schedule,
@@ -200,6 +206,7 @@ class VibrationSettings:
     n_modes: int = 12  #: modes computed in the modal stage
     max_frequency_hz: float = 300.0  #: ranked modes above this are not excited [Hz]
     control: bool = True  #: insert a non-modal control frequency
+    modal_stage: bool = True  #: false: no modal stage (needs a [[schedule]] without mode/ranked)
 
     def __post_init__(self) -> None:
         _check_choice("forcing", self.forcing, FORCINGS)
@@ -252,6 +259,84 @@ class OutputSettings:
             raise ValueError(f"slip_rate_mm_s must be positive, got {self.slip_rate_mm_s}")
 
 
+@dataclass(frozen=True)
+class StaticForceSettings:
+    """``[static_force]``: the static axial force after the self-weight stage [N, +z up].
+
+    From the held self-weight force at the end of the self-weight stage (time 0 of this
+    history) the force goes linearly through the points (``times_s[k]``, ``forces_N[k]``),
+    times counted from the end of the self-weight stage, and is held at the last value.
+    Empty (the default): the self-weight force is held to the end. Dismount: ramp to a
+    positive pull, e.g. ``times_s = [0.05]``, ``forces_N = [20e3]``.
+    """
+
+    times_s: tuple[float, ...] = ()
+    forces_N: tuple[float, ...] = ()
+
+    def __post_init__(self) -> None:
+        object.__setattr__(self, "times_s", tuple(self.times_s))
+        object.__setattr__(self, "forces_N", tuple(self.forces_N))
+        if len(self.times_s) != len(self.forces_N):
+            raise ValueError(
+                f"times_s and forces_N need the same length, got {len(self.times_s)} and "
+                f"{len(self.forces_N)}"
+            )
+        if not all(isinstance(x, (int, float)) for x in self.times_s + self.forces_N):
+            raise ValueError("times_s and forces_N must be lists of numbers [s], [N]")
+        if self.times_s and not (
+            self.times_s[0] > 0 and all(b > a for a, b in zip(self.times_s, self.times_s[1:]))
+        ):
+            raise ValueError(
+                f"times_s must be positive and strictly increasing (s after the self-weight "
+                f"stage), got {list(self.times_s)}"
+            )
+
+    def history(self, self_weight: SelfWeightSettings) -> Callable[[float], float]:
+        """The whole static axial force [N] against the run's time [s]."""
+        sw = self_weight
+        if not self.times_s:
+            return RampedAxialForce(sw.force_N, sw.ramp_time_s)
+        start = [(0.0, 0.0)] if sw.ramp_time_s > 0 else []
+        start += [(sw.ramp_time_s, sw.force_N)]
+        if sw.hold_s > 0:
+            start += [(sw.duration_s, sw.force_N)]
+        after = [(sw.duration_s + t, f) for t, f in zip(self.times_s, self.forces_N)]
+        times, forces = zip(*(start + after))
+        return PiecewiseLinearForce(times, forces)
+
+
+@dataclass(frozen=True)
+class ImperfectionSettings:
+    """``[imperfections.mp]`` / ``[imperfections.tp]``: radial imperfection of a part's wall.
+
+    Either ``file`` (a processed map or raw laser ring scans, ``geometry.imperfections``; a
+    relative path is looked up from the working directory, then beside the case file) or an
+    ovality ``amplitude_m`` cos(``waves`` (theta - ``phase_deg``)) [m], uniform along the axis.
+    """
+
+    file: str = ""
+    amplitude_m: float = 0.0  #: ovality amplitude [m]
+    waves: int = 2  #: circumferential wave number of the ovality
+    phase_deg: float = 0.0
+
+    def __post_init__(self) -> None:
+        if self.file and self.amplitude_m:
+            raise ValueError("give either file or amplitude_m (ovality), not both")
+        if not self.file and not self.amplitude_m:
+            raise ValueError("needs a file or a non-zero ovality amplitude_m")
+        if not (isinstance(self.waves, int) and self.waves >= 1):
+            raise ValueError(f"waves must be an integer >= 1, got {self.waves!r}")
+
+    def deviation(self, part, case_dir: Path) -> RadialDeviation:
+        """The radial deviation function of ``part`` (reads and checks the file)."""
+        if not self.file:
+            return ovality(self.amplitude_m, self.waves, self.phase_deg)
+        path = Path(self.file)
+        if not path.is_file() and not path.is_absolute() and (case_dir / path).is_file():
+            path = case_dir / path
+        return read_imperfection(path, part)
+
+
 SECTIONS = {
     "contact": ContactSettings,
     "damping": DampingSettings,
@@ -259,8 +344,10 @@ SECTIONS = {
     "self_weight": SelfWeightSettings,
     "vibration": VibrationSettings,
     "output": OutputSettings,
+    "static_force": StaticForceSettings,
 }
 KNOWN_TABLES = {
+    "imperfections",
     "geometry",
     "material",
     "mesh",
@@ -286,8 +373,10 @@ class InstallationCase:
     self_weight: SelfWeightSettings
     vibration: VibrationSettings
     output: OutputSettings
+    static_force: StaticForceSettings
     schedule: Schedule | None  #: explicit [[schedule]] (start time 0: shifted after self-weight)
     source: str = "case"
+    imperfections: dict[str, ImperfectionSettings] = field(default_factory=dict)
 
     @classmethod
     def from_dict(cls, case: dict[str, Any]) -> InstallationCase:
@@ -319,6 +408,18 @@ class InstallationCase:
                             f"schedule stage {i + 1} asks for mode {s.mode_number} but the modal "
                             f"stage computes {vib.n_modes} (vibration.n_modes)"
                         )
+                    if s.ranked_number is not None and s.ranked_number > vib.n_frequencies:
+                        raise ValueError(
+                            f"schedule stage {i + 1} asks for ranked {s.ranked_number} but "
+                            f"{vib.n_frequencies} ranked frequencies are chosen "
+                            "(vibration.n_frequencies)"
+                        )
+            if not vib.modal_stage and (schedule is None or schedule.needs_modes):
+                raise ValueError(
+                    "vibration.modal_stage = false needs a [[schedule]] without 'mode k' or "
+                    "'ranked k' stages (the automatic schedule comes from the modal stage)"
+                )
+            imperfections = _imperfections(case, joint)
             if vib.forcing == "shaker" and not 0 <= vib.shaker_height_m <= joint.tp.total_length:
                 raise ValueError(
                     f"[vibration] shaker_height_m = {vib.shaker_height_m} m lies outside the TP "
@@ -326,14 +427,69 @@ class InstallationCase:
                 )
         except ValueError as e:
             raise ValueError(f"{source}: {e}") from None
-        return cls(joint, material, mesh, friction, schedule=schedule, source=source, **settings)
+        return cls(
+            joint,
+            material,
+            mesh,
+            friction,
+            schedule=schedule,
+            source=source,
+            imperfections=imperfections,
+            **settings,
+        )
+
+    def deviations(self) -> dict[str, RadialDeviation]:
+        """The radial deviations of the imperfect parts (``geometry.imperfections``)."""
+        case_dir = Path(self.source).parent
+        return {
+            name: setting.deviation(getattr(self.joint, name), case_dir)
+            for name, setting in self.imperfections.items()
+        }
 
     def describe(self) -> dict[str, Any]:
         """Plain-data summary of the settings (written to the output folder)."""
         out = {name: asdict(getattr(self, name)) for name in ("mesh", "friction", *SECTIONS)}
         out["material"] = asdict(self.material)
+        out["imperfections"] = {k: asdict(v) for k, v in self.imperfections.items()}
         out["source"] = self.source
         return out
+
+
+def _imperfections(case: dict[str, Any], joint: JointGeometry) -> dict[str, ImperfectionSettings]:
+    """The ``[imperfections]`` tables, checked (files read) and placed (first contact found)."""
+    table = case.get("imperfections", {})
+    if not isinstance(table, dict) or set(table) - {"mp", "tp"}:
+        raise ValueError(
+            "[imperfections] must hold the tables [imperfections.mp] and/or [imperfections.tp]"
+        )
+    settings = {
+        name: construct(ImperfectionSettings, dict(data), f"imperfections.{name}")
+        for name, data in table.items()
+    }
+    case_dir = Path(case.get("_source", ".")).parent
+    deviations = {}
+    for name, setting in settings.items():
+        try:
+            deviations[name] = setting.deviation(getattr(joint, name), case_dir)
+        except ValueError as e:
+            raise ValueError(f"[imperfections.{name}] {e}") from None
+    if deviations:
+        try:
+            tp_placement(joint, deviations)
+        except ValueError as e:
+            raise ValueError(f"[imperfections] {e}") from None
+    return settings
+
+
+@dataclass(frozen=True)
+class PlacedJoint:
+    """The joint's parts with the TP's lower end at ``tp_offset`` [m] as meshed: at the first
+    contact of the (imperfect) surfaces, ``geometry.contact_map.tp_placement``. Used where a
+    position on the TP is needed (settlement probes, point forces, plots)."""
+
+    mp: Any
+    tp: Any
+    tp_offset: float
 
 
 class InstallationProblem(Elastodynamics):
@@ -364,10 +520,11 @@ class JointModel:
     bcs: list
     contact: NitscheContact
     top: TopFaceLoad
-    static: RampedAxialForce
+    static: Callable[[float], float]  #: static axial force [N] against time [s]
     problem: InstallationProblem
     settlement: Settlement
     damping: RayleighDamping | ModalDamping
+    placed: PlacedJoint
     timings_s: dict[str, float] = field(default_factory=dict)
 
     @property
@@ -382,7 +539,9 @@ class JointModel:
 def build_joint_model(comm: MPI.Comm, case: InstallationCase) -> JointModel:
     """Set up the joint of ``case`` at rest in its first-contact position (collective)."""
     t0 = time.perf_counter()
-    mesh_data = create_joint_mesh(comm, case.joint, case.mesh)
+    deviations = case.deviations()
+    placed = PlacedJoint(case.joint.mp, case.joint.tp, tp_placement(case.joint, deviations))
+    mesh_data = create_joint_mesh(comm, case.joint, case.mesh, deviations)
     V = fem.functionspace(mesh_data.mesh, ("Lagrange", case.contact.degree, (3,)))
     bcs = [clamp(V, mesh_data.facet_tags, [tags.MP_CLAMPED])]
     M, K = assemble_structure(V, case.material, bcs)
@@ -410,7 +569,7 @@ def build_joint_model(comm: MPI.Comm, case: InstallationCase) -> JointModel:
         )
         damping.check_step(case.self_weight.dt_s)  # explicit in time: fail before the time loop
     sw = case.self_weight
-    static = RampedAxialForce(sw.force_N, sw.ramp_time_s)
+    static = case.static_force.history(sw)
     top = TopFaceLoad(V, mesh_data.facet_tags, tags.TP_TOP)
     problem = InstallationProblem(
         V,
@@ -428,7 +587,7 @@ def build_joint_model(comm: MPI.Comm, case: InstallationCase) -> JointModel:
         },
     )
     problem.initialise(0.0)
-    settlement = Settlement(problem.u, case.joint, mesh_data.cell_tags)
+    settlement = Settlement(problem.u, placed, mesh_data.cell_tags)
     return JointModel(
         case,
         mesh_data,
@@ -440,6 +599,7 @@ def build_joint_model(comm: MPI.Comm, case: InstallationCase) -> JointModel:
         problem,
         settlement,
         damping,
+        placed,
         {"set-up": time.perf_counter() - t0},
     )
 
@@ -544,6 +704,38 @@ def choose_frequencies(records: list[ModeRecord], settings: VibrationSettings) -
         for f in settings.lead_in_hz
     ]
     return lead + chosen
+
+
+def _schedule_excitations(
+    schedule: Schedule, natural_hz: list[float], chosen: list[Excitation]
+) -> list[Excitation]:
+    """One Excitation per stage of an explicit schedule: 'mode k' at the k-th natural frequency,
+    'ranked k' at the k-th best-ranked chosen natural frequency (with its reason)."""
+    ranked = sorted((e for e in chosen if e.role == "modal"), key=lambda e: (e.rank, e.mode))
+    resolved = schedule.with_natural_frequencies(natural_hz, [e.frequency_Hz for e in ranked])
+    out = []
+    for s, r in zip(schedule.stages, resolved.stages):
+        f = float(r.frequency_hz)
+        if s.ranked_number is not None:
+            e = ranked[s.ranked_number - 1]
+            out.append(
+                replace(
+                    e,
+                    amplitude_N=s.amplitude_N,
+                    role="schedule",
+                    reason=f"[[schedule]] ranked {s.ranked_number}: {e.reason}",
+                )
+            )
+        elif s.mode_number is not None:
+            out.append(
+                Excitation(
+                    f, s.amplitude_N, "schedule", s.mode_number, -1, -1, 0, "[[schedule]] mode"
+                )
+            )
+        else:
+            what = "no vibration" if f == 0 or s.amplitude_N == 0 else "[[schedule]] of the case"
+            out.append(Excitation(f, s.amplitude_N, "schedule", 0, -1, -1, 0, what))
+    return out
 
 
 # -- the run ----------------------------------------------------------------------------------
@@ -721,22 +913,26 @@ class Installation:
         if self.case.output.plots:
             report.plot_contact_status(
                 self.model.contact,
-                self.case.joint,
+                self.model.placed,
                 self.output / f"contact_status_{len(self.stages)}.png",
                 f"after {name}, t = {self.model.problem.t:.4g} s",
             )
 
     def _schedule(self, start_s: float) -> Schedule:
         """The vibration schedule from ``start_s``: the automatic one (from the chosen excitations)
-        or the case's [[schedule]] with 'mode k' set to the settled joint's frequencies."""
+        or the case's [[schedule]] with 'mode k' / 'ranked k' set to the settled joint's
+        frequencies."""
         vib = self.case.vibration
         if self.case.schedule is None:
             stages = [
                 vib.stage(vib.stage_duration_s, e.frequency_Hz, e.amplitude_N)
                 for e in self.excitations
             ]
-        else:
-            stages = self.case.schedule.with_natural_frequencies(self.natural_frequencies).stages
+        else:  # 'mode k' / 'ranked k' stages at the frequencies found by the modal stage
+            stages = [
+                replace(s, frequency_hz=e.frequency_Hz) if isinstance(s.frequency_hz, str) else s
+                for s, e in zip(self.case.schedule.stages, self.excitations)
+            ]
         return Schedule(stages, start_s=start_s)
 
     def _symmetric_contact(self) -> NitscheContact:
@@ -760,56 +956,63 @@ class Installation:
         return symmetric
 
     def _modal_stage(self) -> None:
-        """Modes of the settled joint (contact tangent at its current status); frequency choice."""
+        """Modes of the settled joint (contact tangent at its current status); frequency choice.
+
+        With ``vibration.modal_stage = false`` only the explicit [[schedule]] is planned."""
         model, vib = self.model, self.case.vibration
         t0 = time.perf_counter()
-        interface = ContactInterface(self._symmetric_contact(), model.contact.state.status)
-        result = modal_analysis(
-            model.V, self.case.material, model.bcs, [interface], EigenOptions(n_modes=vib.n_modes)
-        )
-        parts = JointParts.for_joint(model.V, model.mesh_data, self.case.joint)
-        nodes_around = self.case.mesh.n_circumferential * self.case.contact.degree
-        records = describe_modes(
-            result,
-            self.case.material,
-            parts,
-            zeta=max(self.case.damping.zeta, 1e-4),
-            m_max=min(12, (nodes_around - 1) // 2),
-        )
-        if self.case.output.plots:
-            write_outputs(result, records, self.output)
-        else:
-            write_csv(records, self.output / "modes.csv", self.comm)
-        self.modal = (result, records)
-        self.natural_frequencies = [float(f) for f in result.frequencies_hz]
+        records: list[ModeRecord] = []
+        if vib.modal_stage:
+            # small vibrations about the settled state: every touching point sticks (a point
+            # that slipped in the last step of the stage is at rest now; with only its normal
+            # tied, the TP could slide and rock freely on the thin contact band: spurious ~0 Hz
+            # modes)
+            status = np.where(
+                model.contact.state.status == Status.OPEN, Status.OPEN, Status.STICK
+            )
+            interface = ContactInterface(self._symmetric_contact(), status)
+            result = modal_analysis(
+                model.V,
+                self.case.material,
+                model.bcs,
+                [interface],
+                EigenOptions(n_modes=vib.n_modes),
+            )
+            parts = JointParts.for_joint(model.V, model.mesh_data, model.placed)
+            nodes_around = self.case.mesh.n_circumferential * self.case.contact.degree
+            records = describe_modes(
+                result,
+                self.case.material,
+                parts,
+                zeta=max(self.case.damping.zeta, 1e-4),
+                m_max=min(12, (nodes_around - 1) // 2),
+            )
+            if self.case.output.plots:
+                write_outputs(result, records, self.output)
+            else:
+                write_csv(records, self.output / "modes.csv", self.comm)
+            self.modal = (result, records)
+            self.natural_frequencies = [float(f) for f in result.frequencies_hz]
+        chosen = choose_frequencies(records, vib)
         if self.case.schedule is None:
-            self.excitations = choose_frequencies(records, vib)
+            self.excitations = chosen
         else:
-            self.excitations = [
-                Excitation(
-                    float(s.frequency_hz)
-                    if s.mode_number is None
-                    else self.natural_frequencies[s.mode_number - 1],
-                    s.amplitude_N,
-                    "schedule",
-                    s.mode_number or 0,
-                    -1,
-                    -1,
-                    0,
-                    "[[schedule]] of the case",
-                )
-                for s in self.case.schedule.stages
-            ]
+            self.excitations = _schedule_excitations(
+                self.case.schedule, self.natural_frequencies, chosen
+            )
         schedule = self._schedule(model.problem.t)
         self.plans += _plan_vibration(
             schedule, self.case.time.steps_per_period, [e.reason for e in self.excitations]
         )
         report.write_choice(self.excitations, self.output / "frequencies.csv", self.comm)
-        tied = interface.tied_fraction()
-        self.log(
-            f"modal stage: {len(records)} modes of the settled joint ({100 * tied:.1f} % of the "
-            f"contact points tied) in {time.perf_counter() - t0:.1f} s; excitation:"
-        )
+        if vib.modal_stage:
+            self.log(
+                f"modal stage: {len(records)} modes of the settled joint "
+                f"({100 * interface.tied_fraction():.1f} % of the contact points tied) in "
+                f"{time.perf_counter() - t0:.1f} s; excitation:"
+            )
+        else:
+            self.log("no modal stage (vibration.modal_stage = false); excitation:")
         for e in self.excitations:
             amp = e.amplitude_N if isinstance(e.amplitude_N, str) else f"{e.amplitude_N:.0f} N"
             self.log(f"  {e.frequency_Hz:8.2f} Hz  {amp:>9}  {e.role:8} {e.reason}")
@@ -825,7 +1028,7 @@ class Installation:
         if vib.forcing == "face":
             loading.schedule = schedule
         else:
-            j = self.case.joint
+            j = model.placed
             if vib.forcing == "eccentric":
                 point = shaker_point(j.tp, j.tp_offset, j.tp.total_length, vib.angle_deg)
                 point[2] -= 1e-6 * j.tp.total_length  # just inside the top face
