@@ -619,12 +619,16 @@ class Excitation:
     reason: str
 
 
+PAIR_TOLERANCE = 0.02  #: relative frequency difference within which two modes are one pair
+
+
 def choose_frequencies(records: list[ModeRecord], settings: VibrationSettings) -> list[Excitation]:
     """Excitation stages from the ranking of the settled joint's modes.
 
     * the lead-in frequencies (SPEC 3 reference sequence) at the eccentric amplitude;
     * the ``n_frequencies`` best-ranked distinct frequencies up to ``max_frequency_hz``
-      (one per degenerate pair);
+      (one per degenerate pair: modes within ``PAIR_TOLERANCE`` of a chosen frequency are
+      its partner);
     * the lowest (m = 2, n = 1) mode if not among them (SPEC 5.4: the most effective);
     * a control frequency: the point between the lowest and highest chosen natural
       frequency farthest from every computed natural frequency (with a single chosen
@@ -633,13 +637,16 @@ def choose_frequencies(records: list[ModeRecord], settings: VibrationSettings) -
     """
     candidates = [r for r in records if r.frequency_Hz <= settings.max_frequency_hz]
     chosen: list[Excitation] = []
-    seen_ranks = set()
+
+    def same_pair(r: ModeRecord) -> bool:  # the partner of a degenerate pair (or a near-tie)
+        return any(abs(r.frequency_Hz - c.frequency_Hz) <= PAIR_TOLERANCE * c.frequency_Hz
+                   for c in chosen)
+
     for r in sorted(candidates, key=lambda r: (r.rank, r.mode)):
-        if len(seen_ranks) >= settings.n_frequencies:
+        if len(chosen) >= settings.n_frequencies:
             break
-        if r.rank in seen_ranks:
+        if same_pair(r):
             continue
-        seen_ranks.add(r.rank)
         chosen.append(
             Excitation(
                 r.frequency_Hz,
@@ -654,7 +661,7 @@ def choose_frequencies(records: list[ModeRecord], settings: VibrationSettings) -
             )
         )
     m2n1 = [r for r in candidates if (r.m, r.n) == (2, 1)]
-    if m2n1 and all((c.m, c.n) != (2, 1) for c in chosen):
+    if m2n1 and all((c.m, c.n) != (2, 1) for c in chosen) and not same_pair(min(m2n1, key=lambda r: r.frequency_Hz)):
         r = min(m2n1, key=lambda r: r.frequency_Hz)
         chosen.append(
             Excitation(

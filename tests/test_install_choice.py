@@ -15,11 +15,12 @@ def _record(mode: int, f: float, m: int, n: int, rank: int) -> ModeRecord:
     )
 
 
-# the experiments' modes (SPEC 5.9) with a made-up ranking; 86 Hz is a degenerate pair
+# the experiments' modes (SPEC 5.9) with a made-up ranking; 86 Hz is a degenerate pair whose
+# partners rank differently (the forcing point excites one of them, as on the joint)
 RECORDS = [
     _record(1, 50.0, 1, 0, 3),
     _record(2, 86.0, 3, 0, 2),
-    _record(3, 86.0, 3, 0, 2),
+    _record(3, 86.4, 3, 0, 6),
     _record(4, 106.0, 4, 0, 4),
     _record(5, 120.0, 2, 1, 5),
     _record(6, 150.0, 1, 1, 1),
@@ -41,6 +42,7 @@ def test_best_ranks_plus_m2n1_plus_control():
     (control,) = [e for e in chosen if e.role == "control"]
     natural = np.array([r.frequency_Hz for r in RECORDS])
     assert 86.0 <= control.frequency_Hz <= 150.0
+    assert all(e.frequency_Hz != 86.4 for e in chosen)
     # farthest point from all natural frequencies in [86, 150]: midway between 120 and 150
     assert control.frequency_Hz == pytest.approx(135.0, abs=0.05)
     assert np.min(np.abs(natural - control.frequency_Hz)) == pytest.approx(15.0, abs=0.05)
@@ -56,3 +58,15 @@ def test_single_frequency_control_stays_below_the_limit():
     control = next(e for e in chosen if e.role == "control")
     assert 0.5 * 233.0 <= control.frequency_Hz <= 300.0
     assert [e.role for e in chosen] == ["control", "modal"]  # increasing frequency
+
+
+def test_pair_partner_is_not_a_second_frequency():
+    """The joint's case: one pair partner ranks high, the other (orthogonal to the forcing)
+    low; only one of them is excited, and the control is not squeezed between them."""
+    records = [_record(1, 138.27, 1, 0, 8), _record(2, 140.48, 1, 0, 17), _record(3, 337.4, 1, 0, 3)]
+    chosen = choose_frequencies(
+        records, VibrationSettings(n_frequencies=3, lead_in_hz=(), max_frequency_hz=300.0)
+    )
+    assert [e.frequency_Hz for e in chosen if e.role == "modal"] == [138.27]
+    control = next(e for e in chosen if e.role == "control")
+    assert min(abs(control.frequency_Hz - r.frequency_Hz) for r in records) > 0.2 * 138.27
