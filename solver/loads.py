@@ -5,14 +5,18 @@ down onto the MP, positive pulls it off); "lateral" is the horizontal direction 
 ``lateral_angle_deg`` from the x axis.
 
 * ``RampedAxialForce``: static axial force ramped linearly from 0 over ``ramp_time_s``,
-  then held (self-weight emulation: -10 kN over 2 s; dismount: a positive pull).
+  then held (self-weight emulation: -10 kN over 2 s).
+* ``PiecewiseLinearForce``: static axial force through the points (t_k, F_k), linear
+  between them, held outside (any static history, e.g. self-weight then a dismount pull).
 * ``Stage``/``Schedule``: harmonic excitation F(t) = A(t) sin(phi(t)) d, stage by stage,
   with linear ramps of frequency and amplitude inside a stage. The phase is the
   integral phi(t) = 2 pi int_0^t f dt, so it is continuous across frequency ramps and
   jumps. The amplitude is a force [N] or "eccentric": the eccentric-motor law
   A = 0.3632 f^2 N (f in Hz) at the instantaneous frequency. A stage frequency may be
-  "mode k", the k-th natural frequency of the current state (1-based), filled in by
-  ``Schedule.with_natural_frequencies`` before the stage is run.
+  "mode k", the k-th natural frequency of the current state (1-based), or "ranked k",
+  the k-th best-ranked natural frequency chosen for excitation (1-based), filled in by
+  ``Schedule.with_natural_frequencies`` before the stage is run. A stage with frequency
+  0 Hz or amplitude 0 N is a stage without vibration (only the static force acts).
 * ``TopFaceLoad``: a total force vector spread as a uniform traction over a tagged
   face (the TP top, ``geometry.tags.TP_TOP``); ``PointLoad``: a force at one point
   (shaker rod).
@@ -37,7 +41,7 @@ from solver.probes import PointLocator
 
 ECCENTRIC_COEFFICIENT = 0.3632  #: eccentric-motor force amplitude per f^2 [N/Hz^2] (SPEC 3)
 DIRECTIONS = ("axial", "lateral", "both")
-_MODE = re.compile(r"^\s*mode\s+(\d+)\s*$")
+_MODE = re.compile(r"^\s*(mode|ranked)\s+(\d+)\s*$")
 
 
 def eccentric_amplitude(frequency_hz: float | np.ndarray) -> float | np.ndarray:
@@ -66,6 +70,35 @@ class RampedAxialForce:
 
 
 @dataclass(frozen=True)
+class PiecewiseLinearForce:
+    """Axial force [N] along +z through the points (``times_s[k]``, ``forces_N[k]``).
+
+    Linear between the points (times strictly increasing), ``forces_N[0]`` before the first
+    and ``forces_N[-1]`` after the last point. ``RampedAxialForce(F, T)`` is the special case
+    ((0, 0), (T, F)).
+    """
+
+    times_s: tuple[float, ...]
+    forces_N: tuple[float, ...]
+
+    def __post_init__(self) -> None:
+        t = np.asarray(self.times_s, dtype=float)
+        f = np.asarray(self.forces_N, dtype=float)
+        if t.ndim != 1 or t.size == 0 or t.shape != f.shape:
+            raise ValueError(f"need as many forces as times (at least one), got {t.size} times "
+                             f"and {f.size} forces")
+        if not (np.all(np.isfinite(t)) and np.all(np.isfinite(f))):
+            raise ValueError("times_s and forces_N must be finite")
+        if np.any(np.diff(t) <= 0):
+            raise ValueError(f"times_s must be strictly increasing, got {list(t)}")
+        object.__setattr__(self, "times_s", tuple(float(x) for x in t))
+        object.__setattr__(self, "forces_N", tuple(float(x) for x in f))
+
+    def __call__(self, t: float) -> float:
+        return float(np.interp(t, self.times_s, self.forces_N))
+
+
+@dataclass(frozen=True)
 class Stage:
     """One stage of harmonic excitation.
 
@@ -89,10 +122,13 @@ class Stage:
         if not (isinstance(self.duration_s, (int, float)) and self.duration_s > 0):
             raise ValueError(f"stage duration_s must be a positive number of seconds, got {self.duration_s!r}")
         if isinstance(self.frequency_hz, str):
-            if not _MODE.match(self.frequency_hz):
-                raise ValueError(f"stage frequency_hz must be a number [Hz] or 'mode k', got {self.frequency_hz!r}")
+            m = _MODE.match(self.frequency_hz)
+            if not m or int(m.group(2)) < 1:
+                raise ValueError(f"stage frequency_hz must be a number [Hz], 'mode k' or 'ranked k' "
+                                 f"(k >= 1), got {self.frequency_hz!r}")
             if self.frequency_end_hz is not None:
-                raise ValueError("a stage at 'mode k' cannot ramp its frequency (frequency_end_hz)")
+                raise ValueError(f"a stage at {self.frequency_hz!r} cannot ramp its frequency "
+                                 "(frequency_end_hz)")
         elif not self.frequency_hz >= 0:
             raise ValueError(f"stage frequency_hz must be >= 0 Hz, got {self.frequency_hz}")
         if self.frequency_end_hz is not None and not self.frequency_end_hz >= 0:
@@ -114,8 +150,16 @@ class Stage:
     @property
     def mode_number(self) -> int | None:
         """k of a 'mode k' stage, else None."""
+        return self._natural("mode")
+
+    @property
+    def ranked_number(self) -> int | None:
+        """k of a 'ranked k' stage, else None."""
+        return self._natural("ranked")
+
+    def _natural(self, kind: str) -> int | None:
         m = _MODE.match(self.frequency_hz) if isinstance(self.frequency_hz, str) else None
-        return int(m.group(1)) if m else None
+        return int(m.group(2)) if m and m.group(1) == kind else None
 
     def frequency(self, tau: float) -> float:
         """Frequency [Hz] at time tau [s] into the stage."""
@@ -170,17 +214,24 @@ class Schedule:
             raise ValueError(f"[[schedule]] must be a list of stage tables, got {type(stages).__name__}")
         return cls([construct(Stage, dict(s), f"schedule stage {i + 1}") for i, s in enumerate(stages)], start_s)
 
-    def with_natural_frequencies(self, frequencies_hz: Sequence[float]) -> "Schedule":
-        """Copy with every 'mode k' stage set to frequencies_hz[k - 1] [Hz]."""
+    def with_natural_frequencies(self, frequencies_hz: Sequence[float],
+                                 ranked_hz: Sequence[float] = ()) -> "Schedule":
+        """Copy with every 'mode k' stage set to frequencies_hz[k - 1] and every 'ranked k'
+        stage to ranked_hz[k - 1] [Hz]."""
         stages = []
         for s in self.stages:
-            k = s.mode_number
-            if k is not None:
-                if not 1 <= k <= len(frequencies_hz):
-                    raise ValueError(f"stage asks for mode {k}, but {len(frequencies_hz)} frequencies are known")
-                s = replace(s, frequency_hz=float(frequencies_hz[k - 1]))
+            for k, known, what in ((s.mode_number, frequencies_hz, "mode"), (s.ranked_number, ranked_hz, "ranked")):
+                if k is not None:
+                    if not 1 <= k <= len(known):
+                        raise ValueError(f"stage asks for {what} {k}, but {len(known)} {what} frequencies are known")
+                    s = replace(s, frequency_hz=float(known[k - 1]))
             stages.append(s)
         return Schedule(stages, self.start_s)
+
+    @property
+    def needs_modes(self) -> bool:
+        """Whether some stage is at 'mode k' or 'ranked k' (needs the modal stage)."""
+        return any(s.mode_number is not None or s.ranked_number is not None for s in self.stages)
 
     def _stage_at(self, t: float) -> tuple[int, float] | None:
         if t < self.start_s or t > self.end_s:
@@ -307,3 +358,22 @@ class TPLoading:
         if self.shaker is not None:
             point, schedule = self.shaker
             point.add(schedule.force(t), out)
+
+
+def frequency_steps(f_start_hz: float, f_stop_hz: float, f_step_hz: float, dwell_s: float,
+                    amplitude_N: float | str = "eccentric", **stage_options: Any) -> list[Stage]:
+    """Step-wise frequency increase: f_start, f_start + f_step, ... up to f_stop [Hz] (included
+    when it is on the grid), each held ``dwell_s`` [s] (SPEC 3: 10 -> 130 Hz in 10 Hz steps of
+    0.5 s with the eccentric amplitude). ``stage_options``: direction, lateral_fraction, ..."""
+    if not (f_start_hz > 0 and f_step_hz > 0 and f_stop_hz >= f_start_hz):
+        raise ValueError(f"need 0 < f_start <= f_stop and f_step > 0, got f_start = {f_start_hz} Hz, "
+                         f"f_stop = {f_stop_hz} Hz, f_step = {f_step_hz} Hz")
+    n = int(math.floor((f_stop_hz - f_start_hz) / f_step_hz + 1e-9)) + 1
+    return [Stage(dwell_s, f_start_hz + k * f_step_hz, amplitude_N, **stage_options) for k in range(n)]
+
+
+def frequency_ramp(f_start_hz: float, f_stop_hz: float, duration_s: float,
+                   amplitude_N: float | str = "eccentric", **stage_options: Any) -> list[Stage]:
+    """A slow linear frequency ramp f_start -> f_stop [Hz] over ``duration_s`` [s] (SPEC 3:
+    0 -> 125 Hz over 13 to 200 s), as one stage (the phase stays continuous)."""
+    return [Stage(duration_s, f_start_hz, amplitude_N, frequency_end_hz=f_stop_hz, **stage_options)]

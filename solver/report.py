@@ -168,7 +168,7 @@ def format_stage(s: dict) -> str:
     f = f"{s['frequency_Hz']:7.2f} Hz" if s["frequency_Hz"] else "   static "
     return (
         f"{s['name']:>12}: {f}, {s['steps']:5d} steps, settlement {s['settlement_end_mm']:8.4f} mm "
-        f"(+{s['gained_mm']:.4f} mm), {s['stick_slip_events']} stick-slip event(s), "
+        f"({s['gained_mm']:+.4f} mm), {s['stick_slip_events']} stick-slip event(s), "
         f"Newton {s['newton_iterations_mean']:.2f}/step"
     )
 
@@ -302,4 +302,63 @@ def plot_history(history: list[dict], stages: list[dict], folder: Path, comm: MP
     ax.set_ylabel("settlement gained in the stage [um]")
     fig.tight_layout()
     fig.savefig(folder / "stage_gain.png", dpi=120)
+    plt.close(fig)
+
+
+SWEEP_COLUMNS = ["time_s", "frequency_Hz", "amplitude_N", "settlement_mm", "settlement_gain_mm"]
+
+
+def sweep_rows(history: list[dict], first_stage: int = 1) -> list[dict[str, float]]:
+    """Rows of the stages from ``first_stage`` on (the sweep after self-weight): time [s],
+    excitation frequency [Hz] and amplitude [N], settlement [mm] and the settlement gained
+    since the sweep started [mm]."""
+    before = [r for r in history if r["stage"] < first_stage]
+    s0 = before[-1]["settlement_mm"] if before else 0.0
+    return [
+        {
+            "time_s": r["time_s"],
+            "frequency_Hz": r["frequency_Hz"],
+            "amplitude_N": r["amplitude_N"],
+            "settlement_mm": r["settlement_mm"],
+            "settlement_gain_mm": r["settlement_mm"] - s0,
+        }
+        for r in history
+        if r["stage"] >= first_stage
+    ]
+
+
+def plot_sweep(
+    rows: list[dict], stages: list[dict], natural_hz: list[float], path: Path, comm: MPI.Comm
+) -> None:
+    """Settlement gained in the sweep against time (with the frequency) and against the
+    excitation frequency, with the natural frequencies of the settled joint (rank 0)."""
+    if comm.rank != 0 or not rows:
+        return
+    os.environ.setdefault("MPLBACKEND", "Agg")
+    import matplotlib.pyplot as plt
+
+    t = np.array([r["time_s"] for r in rows])
+    f = np.array([r["frequency_Hz"] for r in rows])
+    gain = np.array([r["settlement_gain_mm"] for r in rows])
+    fig, (ax_t, ax_f) = plt.subplots(1, 2, figsize=(12, 4.2))
+    ax_t.plot(t, gain, "k-", lw=1)
+    ax_t.set_xlabel("time [s]")
+    ax_t.set_ylabel("settlement gained in the sweep [mm]")
+    twin = ax_t.twinx()
+    twin.plot(t, f, color="tab:orange", lw=1)
+    twin.set_ylabel("excitation frequency [Hz]", color="tab:orange")
+    ax_f.plot(f, gain, "k.-", lw=0.6, ms=2, label="settlement")
+    steps = [s for s in stages[1:] if s["steps"]]
+    if steps and all(s["frequency_Hz"] > 0 for s in steps):
+        ax_f.bar([s["frequency_Hz"] for s in steps], [s["gained_mm"] for s in steps],
+                 width=0.4 * min(np.diff([s["frequency_Hz"] for s in steps]), default=10.0),
+                 alpha=0.3, label="gained per stage")
+    lo, hi = f.min(), f.max()
+    for k, fn in enumerate(x for x in natural_hz if lo <= x <= hi):
+        ax_f.axvline(fn, color="tab:blue", ls=":", lw=0.8, label="natural frequency" if k == 0 else None)
+    ax_f.set_xlabel("excitation frequency [Hz]")
+    ax_f.set_ylabel("settlement gained [mm]")
+    ax_f.legend(loc="best", fontsize=8)
+    fig.tight_layout()
+    fig.savefig(path, dpi=120)
     plt.close(fig)

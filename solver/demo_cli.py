@@ -1,0 +1,132 @@
+"""Command line shared by the installation-type demos (sweep, dismount, imperfections, parameter
+study): a case file plus ``--set table.key=value`` overrides, named shorthands for the common
+keys, ``--quick`` and ``--output``; bad options give ``error: ...`` and exit code 2 before any
+computation, a time loop that gives up gives exit code 1 (as ``demos/install.py``).
+
+Override order (later wins): the demo's defaults, ``--quick``, the named options, ``--set``.
+"""
+
+from __future__ import annotations
+
+import argparse
+import sys
+from collections.abc import Callable
+from pathlib import Path
+from typing import Any
+
+from mpi4py import MPI
+
+from solver.case import read_case
+from solver.installation import Installation, InstallationCase
+
+#: the contact settings with which the frictional self-weight stage converges on the very
+#: coarse joint (docs/contact.md, docs/install.md: the default run of demos/install.py)
+COARSE_FRICTIONAL = [
+    "mesh.n_circumferential=8",
+    "mesh.axial_size=0.25",
+    "contact.theta=-1",
+    "contact.gamma0=1.0",
+    "contact.max_gap_change=1e-5",
+    "contact.max_backtracks=4",
+    "time.rho_inf=0.0",
+    "self_weight.hold_s=0.0",
+    "time.steps_per_period=16",
+]
+
+#: --quick: the tiny joint of the pipeline tests (12 around, 0.2 m, frictionless contact: with
+#: friction Newton stalls on it after a fast ramp, docs/install.md "Known problems"), a 12 ms
+#: self-weight ramp, short stages, no ParaView files; a smoke run of the demo, not physics
+QUICK = [
+    "mesh.n_circumferential=12",
+    "mesh.axial_size=0.2",
+    "friction.mu_s=0.0",
+    "friction.mu_d=0.0",
+    "self_weight.ramp_time_s=0.012",
+    "self_weight.hold_s=0.002",
+    "self_weight.dt_s=0.002",
+    "vibration.n_modes=4",
+    "vibration.n_frequencies=1",
+    "vibration.lead_in_hz=[]",
+    "time.steps_per_period=4",
+    "output.checkpoint_every=50",
+    "output.paraview=false",
+]
+
+#: named options -> case keys
+NAMED = {
+    "mesh_size": ("mesh.axial_size", float, "axial element size [m]"),
+    "n_circumferential": ("mesh.n_circumferential", int, "elements around (multiple of 4)"),
+    "mu_s": ("friction.mu_s", float, "static friction coefficient"),
+    "mu_d": ("friction.mu_d", float, "dynamic friction coefficient"),
+    "d_c": ("friction.d_c", float, "friction decay coefficient [s/m]"),
+    "damping": ("damping.model", str, "damping model: rayleigh | modal"),
+    "forcing": ("vibration.forcing", str, "where the vibration force acts: eccentric | face | shaker"),
+    "direction": ("vibration.direction", str, "vibration force direction: axial | lateral | both"),
+    "steps_per_period": ("time.steps_per_period", int, "time steps per excitation period"),
+}
+
+
+def parser(description: str, output: str) -> argparse.ArgumentParser:
+    """The common options; a demo adds its own."""
+    p = argparse.ArgumentParser(description=description)
+    p.add_argument("--case", default="scaled", help="case file or preset name in cases/")
+    p.add_argument("--set", action="append", default=[], metavar="TABLE.KEY=VALUE",
+                   help="override a case entry, e.g. friction.mu_s=0.3 (repeatable)")
+    for name, (_, kind, text) in NAMED.items():
+        p.add_argument("--" + name.replace("_", "-"), type=kind, help=text)
+    p.add_argument("--quick", action="store_true",
+                   help="smoke run on the tiny frictionless joint with very short stages "
+                   "(what CTest runs; not physics)")
+    p.add_argument("--output", default=output, help="output folder")
+    p.add_argument("--no-progress", action="store_true", help="no progress bar")
+    return p
+
+
+def overrides(args: argparse.Namespace, defaults: list[str], quick: list[str]) -> list[str]:
+    """Case overrides: defaults, then --quick's, then the named options, then --set."""
+    items = list(defaults) + (list(quick) if args.quick else [])
+    for name, (key, _, _) in NAMED.items():
+        value = getattr(args, name)
+        if value is not None:
+            items.append(f"{key}={value!r}" if isinstance(value, str) else f"{key}={value}")
+    return items + list(args.set)
+
+
+def fail(comm: MPI.Comm, message: str) -> int:
+    """Print ``error: message`` (rank 0) and return the exit code 2."""
+    if comm.rank == 0:
+        print(f"error: {message}", file=sys.stderr, flush=True)
+    return 2
+
+
+def load_case(
+    args: argparse.Namespace,
+    items: list[str],
+    edit: Callable[[dict[str, Any]], None] | None = None,
+) -> InstallationCase:
+    """The checked case (ValueError on any problem); ``edit`` may change the case dict first
+    (e.g. put in a generated [[schedule]])."""
+    data = read_case(args.case, items)
+    if edit is not None:
+        edit(data)
+    return InstallationCase.from_dict(data)
+
+
+def run(comm: MPI.Comm, case: InstallationCase, output: str | Path, progress: bool = True,
+        log: Callable[[str], None] | None = None) -> tuple[Installation, int]:
+    """Run the installation pipeline of ``case``; returns the runner and the exit code
+    (0 done, 1 the time loop gave up: results up to there are in ``output``)."""
+    runner = Installation(comm, case, output, log=log, progress=progress)
+    try:
+        runner.run()
+    except RuntimeError as e:  # Newton failed at the minimum step
+        if comm.rank == 0:
+            print(f"\nrun stopped: {e}\nresults up to this point are in {output}",
+                  file=sys.stderr, flush=True)
+        return runner, 1
+    return runner, 0
+
+
+def say(comm: MPI.Comm) -> Callable[[str], None]:
+    """print on rank 0, flushed (progress messages)."""
+    return lambda s: print(s, flush=True) if comm.rank == 0 else None

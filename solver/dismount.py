@@ -1,0 +1,189 @@
+"""Dismount of an installed joint (SPEC 3, 5.5): a pulling axial force alone, then pulling plus
+vibration at the ranked natural frequencies of the settled joint.
+
+:func:`dismount_case` writes the sequence into an installation case (``solver.installation``):
+after the self-weight stage, optionally ``n_install`` installation stages at the ranked
+frequencies with the self-weight force held, then the static axial force is ramped from the
+self-weight force (down) to the pull ``pull_N`` (up, > 0) over ``ramp_s`` and held
+(``[static_force]``), the pull acts alone for ``hold_s``, and then ``n_frequencies`` stages
+at 'ranked 1', 'ranked 2', ... with the pull held (``[[schedule]]``).
+
+:func:`dismount_table` reads the run per stage: the TP's axial motion (settlement change,
+negative = the TP moved up) and whether it separated: the contact normal force at the end of
+the stage below ``separation_fraction`` of the normal force at the end of the self-weight
+stage (0 when every contact point is open). SI units: N, s, mm in the tables as named.
+"""
+
+from __future__ import annotations
+
+import csv
+import os
+from collections.abc import Callable
+from dataclasses import dataclass
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+from mpi4py import MPI
+
+DISMOUNT_COLUMNS = [
+    "stage",
+    "role",
+    "start_s",
+    "end_s",
+    "frequency_Hz",
+    "static_force_end_N",
+    "settlement_start_mm",
+    "settlement_end_mm",
+    "axial_motion_mm",
+    "normal_force_end_N",
+    "normal_force_min_N",
+    "open_fraction_end",
+    "separated",
+]
+
+
+@dataclass(frozen=True)
+class DismountPlan:
+    """The dismount sequence after the self-weight stage (SI units)."""
+
+    pull_N: float = 20e3  #: pulling (upward) static force [N], SPEC 3: 10-40 kN
+    ramp_s: float = 0.05  #: ramp from the self-weight force to the pull [s]
+    hold_s: float = 0.05  #: pull alone, held [s]
+    n_install: int = 0  #: installation stages (ranked frequencies, self-weight held) before
+    n_frequencies: int = 1  #: pull + vibration stages at 'ranked 1..n'
+    stage_duration_s: float = 0.1  #: each vibration stage [s]
+    amplitude_N: float = 3600.0  #: vibration force amplitude [N]
+
+    def __post_init__(self) -> None:
+        if not self.pull_N > 0:
+            raise ValueError(f"the pull must be a positive (upward) force, got {self.pull_N} N")
+        if not (self.ramp_s > 0 and self.hold_s > 0 and self.stage_duration_s > 0):
+            raise ValueError(
+                f"pull ramp, pull hold and stage durations must be positive, got "
+                f"{self.ramp_s}, {self.hold_s}, {self.stage_duration_s} s"
+            )
+        for name in ("n_install", "n_frequencies"):
+            value = getattr(self, name)
+            if not (isinstance(value, int) and value >= 0):
+                raise ValueError(f"{name} must be an integer >= 0, got {value!r}")
+        if not self.amplitude_N > 0:
+            raise ValueError(f"amplitude must be positive, got {self.amplitude_N} N")
+
+    def roles(self) -> list[str]:
+        """Role of each stage after the self-weight stage."""
+        return (
+            ["install"] * self.n_install
+            + ["pull ramp", "pull alone"]
+            + ["pull + vibration"] * self.n_frequencies
+        )
+
+
+def dismount_case(case: dict[str, Any], plan: DismountPlan) -> None:
+    """Write ``plan`` into the case dict (``[static_force]``, ``[[schedule]]``), in place.
+
+    The ranked frequencies come from the modal stage after self-weight, so
+    ``vibration.n_frequencies`` is raised to the number of ranked stages if needed.
+    """
+    def ranked(k: int) -> dict[str, Any]:
+        return {"duration_s": plan.stage_duration_s, "frequency_hz": f"ranked {k}",
+                "amplitude_N": plan.amplitude_N}
+
+    def still(duration: float) -> dict[str, Any]:
+        return {"duration_s": duration, "frequency_hz": 0.0, "amplitude_N": 0.0}
+
+    install = [ranked(k + 1) for k in range(plan.n_install)]
+    pull = [ranked(k + 1) for k in range(plan.n_frequencies)]
+    case["schedule"] = install + [still(plan.ramp_s), still(plan.hold_s)] + pull
+    t_pull = plan.n_install * plan.stage_duration_s
+    force_sw = float(case.get("self_weight", {}).get("force_N", -10e3))
+    times, forces = [t_pull + plan.ramp_s], [plan.pull_N]
+    if t_pull > 0:
+        times, forces = [t_pull] + times, [force_sw] + forces
+    case["static_force"] = {"times_s": times, "forces_N": forces}
+    vibration = case.setdefault("vibration", {})
+    needed = max(plan.n_install, plan.n_frequencies)
+    vibration["n_frequencies"] = max(int(vibration.get("n_frequencies", 3)), needed)
+
+
+def dismount_table(
+    history: list[dict[str, float]],
+    stages: list[dict[str, Any]],
+    roles: list[str],
+    static_force: Callable[[float], float],
+    separation_fraction: float = 0.01,
+) -> list[dict[str, Any]]:
+    """Per stage after the self-weight stage: axial motion and separation (see module doc);
+    ``static_force`` [N] against time [s] (``JointModel.static``)."""
+    sw_rows = [r for r in history if r["stage"] == 0]
+    reference = sw_rows[-1]["normal_force_N"] if sw_rows else 0.0
+    table = []
+    for summary, role in zip(stages[1:], roles):
+        rows = [r for r in history if r["stage"] == summary["stage"]]
+        if not rows:
+            continue
+        normal = np.array([r["normal_force_N"] for r in rows])
+        open_end = 1.0 - rows[-1]["stick_fraction"] - rows[-1]["slip_fraction"]
+        table.append(
+            {
+                "stage": summary["stage"],
+                "role": role,
+                "start_s": summary["start_s"],
+                "end_s": summary["end_s"],
+                "frequency_Hz": summary["frequency_Hz"],
+                "static_force_end_N": float(static_force(summary["end_s"])),
+                "settlement_start_mm": summary["settlement_start_mm"],
+                "settlement_end_mm": summary["settlement_end_mm"],
+                "axial_motion_mm": summary["settlement_start_mm"] - summary["settlement_end_mm"],
+                "normal_force_end_N": float(normal[-1]),
+                "normal_force_min_N": float(normal.min()),
+                "open_fraction_end": open_end,
+                "separated": bool(
+                    open_end >= 1.0 or normal[-1] <= separation_fraction * abs(reference)
+                ),
+            }
+        )
+    return table
+
+
+def write_table(table: list[dict[str, Any]], path: Path, comm: MPI.Comm) -> None:
+    """``dismount.csv`` (rank 0)."""
+    if comm.rank != 0:
+        return
+    with open(path, "w", newline="") as f:
+        w = csv.writer(f)
+        w.writerow(DISMOUNT_COLUMNS)
+        for row in table:
+            w.writerow([f"{row[c]:.10g}" if isinstance(row[c], float) else row[c]
+                        for c in DISMOUNT_COLUMNS])
+
+
+def plot(history: list[dict[str, float]], table: list[dict[str, Any]], path: Path,
+         comm: MPI.Comm) -> None:
+    """Settlement and axial force against time, dismount stages shaded (rank 0)."""
+    if comm.rank != 0 or not history:
+        return
+    os.environ.setdefault("MPLBACKEND", "Agg")
+    import matplotlib.pyplot as plt
+
+    t = np.array([r["time_s"] for r in history])
+    fig, (ax, ax_f) = plt.subplots(2, 1, figsize=(9, 6), sharex=True)
+    ax.plot(t, [r["settlement_mm"] for r in history], "k-", lw=1)
+    ax.set_ylabel("settlement [mm] (down +)")
+    ax_f.plot(t, [1e-3 * r["axial_force_N"] for r in history], "tab:blue", lw=1,
+              label="axial force on the TP top (up +)")
+    ax_f.plot(t, [1e-3 * r["normal_force_N"] for r in history], "tab:red", lw=1,
+              label="contact normal force")
+    ax_f.set_xlabel("time [s]")
+    ax_f.set_ylabel("force [kN]")
+    ax_f.legend(loc="best", fontsize=8)
+    colours = {"install": "tab:green", "pull ramp": "tab:orange", "pull alone": "tab:orange",
+               "pull + vibration": "tab:purple"}
+    for row in table:
+        for a in (ax, ax_f):
+            a.axvspan(row["start_s"], row["end_s"], color=colours[row["role"]], alpha=0.12)
+        ax.annotate(row["role"], (0.5 * (row["start_s"] + row["end_s"]), 1.0),
+                    xycoords=("data", "axes fraction"), ha="center", va="bottom", fontsize=7)
+    fig.tight_layout()
+    fig.savefig(path, dpi=120)
+    plt.close(fig)

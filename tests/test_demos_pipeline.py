@@ -1,0 +1,92 @@
+"""The installation pipeline with the demos' settings on the tiny joint (12 around, 0.2 m,
+degree 2, frictionless as in tests/test_install_pipeline.py):
+
+* an ovality of the TP set in ``[imperfections.tp]`` reaches the mesh: the TP's inner-surface
+  nodes deviate from the nominal cone by A cos(2 (theta - phase)), and the TP is placed higher
+  by A / tan(alpha) (it touches first where it is narrowest; closed form);
+* a dismount pull through ``[static_force]``: the history's axial force is the piecewise-linear
+  static force at every step, and without friction the pull lifts the TP off the MP (settlement
+  decreases, the contact normal force drops to zero), which ``solver.dismount`` reports.
+"""
+
+import math
+from pathlib import Path
+
+import numpy as np
+import pytest
+from mpi4py import MPI
+
+from geometry import tags
+from solver.case import read_case
+from solver.dismount import DismountPlan, dismount_case, dismount_table
+from solver.installation import Installation, InstallationCase, build_joint_model
+
+pytestmark = pytest.mark.mpi
+
+TINY = [
+    "mesh.n_circumferential=12",
+    "mesh.axial_size=0.2",
+    "friction.mu_s=0.0",
+    "friction.mu_d=0.0",
+    "self_weight.ramp_time_s=0.012",
+    "self_weight.hold_s=0.002",
+    "self_weight.dt_s=0.002",
+    "time.steps_per_period=8",
+    "output.checkpoint_every=50",
+    "output.plots=false",
+    "output.paraview=false",
+]
+
+
+def test_imperfection_reaches_the_mesh():
+    amplitude, phase = 0.4e-3, 30.0
+    case = InstallationCase.from_dict(
+        read_case("scaled", TINY + [f"imperfections.tp.amplitude_m={amplitude}",
+                                    f"imperfections.tp.phase_deg={phase}"])
+    )
+    model = build_joint_model(MPI.COMM_WORLD, case)
+    joint, tp_z = case.joint, model.placed.tp_offset
+    shift = tp_z - joint.tp_offset
+    assert shift == pytest.approx(amplitude / math.tan(joint.mp.half_angle), rel=2e-3)
+    mesh = model.mesh_data.mesh
+    facets = model.mesh_data.facet_tags.find(tags.TP_CONTACT)
+    mesh.topology.create_connectivity(2, 0)
+    from dolfinx.mesh import entities_to_geometry
+
+    nodes = np.unique(entities_to_geometry(mesh, 2, facets).ravel())
+    x = mesh.geometry.x[nodes]
+    theta = np.arctan2(x[:, 1], x[:, 0])
+    deviation = np.hypot(x[:, 0], x[:, 1]) - joint.tp.inner_radius(x[:, 2] - tp_z)
+    expected = amplitude * np.cos(2 * (theta - math.radians(phase)))
+    worst = MPI.COMM_WORLD.allreduce(float(np.max(np.abs(deviation - expected), initial=0.0)), op=MPI.MAX)
+    print(f"\nTP placed {shift * 1e3:.4f} mm higher; node deviation error {worst * 1e9:.3g} nm")
+    assert worst < 1e-9  # nodes moved exactly (to round-off) by the ovality
+    assert model.settlement()["settlement_mm"] == pytest.approx(0.0, abs=1e-12)  # probes inside
+
+
+def test_dismount_pull_lifts_the_frictionless_tp(tmp_path_factory):
+    comm = MPI.COMM_WORLD
+    out = Path(comm.bcast(str(tmp_path_factory.mktemp("dismount")) if comm.rank == 0 else None))
+    plan = DismountPlan(pull_N=20e3, ramp_s=0.004, hold_s=0.016, n_frequencies=0)
+    data = read_case("scaled", TINY + ["vibration.modal_stage=false"])
+    dismount_case(data, plan)
+    case = InstallationCase.from_dict(data)
+    runner = Installation(comm, case, out, progress=False)
+    runner.run()
+    static = runner.model.static
+    for row in runner.history:  # no vibration: the axial force is the static history
+        assert row["axial_force_N"] == pytest.approx(static(row["time_s"]), abs=1e-9)
+    assert static(runner.history[-1]["time_s"]) == pytest.approx(20e3)
+    table = dismount_table(runner.history, runner.stages, plan.roles(), static)
+    s = [r["settlement_mm"] for r in runner.history]
+    print("\n" + "\n".join(
+        f"{r['role']}: motion {r['axial_motion_mm']:+.4f} mm, normal force "
+        f"{r['normal_force_end_N']:.1f} N, separated {r['separated']}" for r in table)
+        + f"\nself-weight settlement {runner.stages[0]['settlement_end_mm']:.4f} mm, final {s[-1]:.4f} mm")
+    assert runner.stages[0]["settlement_end_mm"] > 0  # installed first
+    assert [r["role"] for r in table] == ["pull ramp", "pull alone"]
+    hold = table[-1]
+    assert hold["axial_motion_mm"] > 0  # the TP moved up while the pull acted alone
+    assert s[-1] < runner.stages[0]["settlement_end_mm"]  # above where the self-weight put it
+    assert hold["normal_force_end_N"] == 0.0 and hold["open_fraction_end"] == 1.0
+    assert hold["separated"]

@@ -1,0 +1,161 @@
+"""Settings behind the sweep, dismount and imperfection demos, checked without a time loop:
+the static axial force history, the sweep schedules, 'ranked k' stages and the imperfection
+tables of an installation case."""
+
+import math
+
+import numpy as np
+import pytest
+from mpi4py import MPI
+
+from geometry.contact_map import tp_placement
+from geometry.imperfections import ovality
+from solver.case import read_case
+from solver.installation import Excitation, InstallationCase, _schedule_excitations
+from solver.loads import (
+    PiecewiseLinearForce,
+    RampedAxialForce,
+    Schedule,
+    eccentric_amplitude,
+    frequency_ramp,
+    frequency_steps,
+)
+
+pytestmark = pytest.mark.mpi
+
+
+def _case(*overrides: str) -> InstallationCase:
+    return InstallationCase.from_dict(read_case("scaled", list(overrides)))
+
+
+def test_piecewise_linear_force_interpolates_and_holds():
+    force = PiecewiseLinearForce((0.0, 2.0, 2.1, 2.3), (0.0, -10e3, 20e3, 20e3))
+    times = [-1.0, 0.0, 0.5, 2.0, 2.05, 2.2, 5.0]
+    # by hand: -2.5 kN at a quarter of the ramp; halfway from -10 to +20 kN is +5 kN
+    assert [force(t) for t in times] == pytest.approx([0, 0, -2.5e3, -10e3, 5e3, 20e3, 20e3])
+    ramp = RampedAxialForce(-10e3, 2.0)
+    two_points = PiecewiseLinearForce((0.0, 2.0), (0.0, -10e3))
+    for t in np.linspace(-0.5, 3.0, 15):
+        assert two_points(t) == pytest.approx(ramp(t), abs=1e-9)
+    with pytest.raises(ValueError, match="strictly increasing"):
+        PiecewiseLinearForce((0.0, 1.0, 1.0), (0.0, 1.0, 2.0))
+    with pytest.raises(ValueError, match="as many forces as times"):
+        PiecewiseLinearForce((0.0, 1.0), (0.0,))
+
+
+def test_static_force_history_continues_the_self_weight():
+    case = _case(
+        "self_weight.ramp_time_s=2.0",
+        "self_weight.hold_s=0.1",
+        "static_force.times_s=[0.05, 0.15]",
+        "static_force.forces_N=[20e3, 20e3]",
+    )
+    history = case.static_force.history(case.self_weight)
+    assert history(1.0) == pytest.approx(-5e3)  # on the self-weight ramp
+    assert history(2.1) == pytest.approx(-10e3)  # held until the end of the self-weight stage
+    assert history(2.1 + 0.025) == pytest.approx(5e3)  # halfway up to the pull
+    assert history(2.1 + 0.05) == pytest.approx(20e3)
+    assert history(10.0) == pytest.approx(20e3)
+    # without [static_force] the self-weight force is held (the installation default)
+    plain = _case().static_force.history(_case().self_weight)
+    assert isinstance(plain, RampedAxialForce) and plain(50.0) == -10e3
+
+
+@pytest.mark.parametrize(
+    "overrides, words",
+    [
+        (["static_force.times_s=[0.1, 0.05]", "static_force.forces_N=[1e3, 2e3]"],
+         ["[static_force]", "strictly increasing"]),
+        (["static_force.times_s=[0.1]", "static_force.forces_N=[1e3, 2e3]"],
+         ["[static_force]", "same length"]),
+        (["static_force.times_s=[0.0]", "static_force.forces_N=[1e3]"], ["positive"]),
+        (["imperfections.tp.amplitude_m=1e-3", "imperfections.tp.file='x.csv'"],
+         ["[imperfections.tp]", "not both"]),
+        (["imperfections.tp.file='no_such_scan.csv'"], ["[imperfections.tp]", "no such file"]),
+        (["imperfections.hub.amplitude_m=1e-3"], ["[imperfections]"]),
+        (["imperfections.tp.amplitude_m=1e-3", "imperfections.tp.waves=0"], ["waves"]),
+        (["vibration.modal_stage=false"], ["modal_stage", "[[schedule]]"]),
+        (["schedule=[{duration_s = 0.1, frequency_hz = 'ranked 5'}]"],
+         ["ranked 5", "n_frequencies"]),
+        (["schedule=[{duration_s = 0.1, frequency_hz = 'ranked 0'}]"], ["ranked k"]),
+    ],
+)
+def test_bad_demo_settings_name_the_problem(overrides, words):
+    with pytest.raises(ValueError) as err:
+        _case(*overrides)
+    for w in words:
+        assert w in str(err.value), str(err.value)
+
+
+def test_step_sweep_schedule():
+    """SPEC 3: 10 -> 130 Hz in 10 Hz steps of 0.5 s at the eccentric amplitude 0.3632 f^2."""
+    schedule = Schedule(frequency_steps(10.0, 130.0, 10.0, 0.5), start_s=2.1)
+    assert len(schedule.stages) == 13
+    assert schedule.end_s == pytest.approx(2.1 + 13 * 0.5)
+    for k in range(13):
+        t = 2.1 + 0.5 * k + 0.25
+        f = 10.0 * (k + 1)
+        assert schedule.frequency(t) == pytest.approx(f)
+        assert schedule.amplitude(t) == pytest.approx(0.3632 * f**2)
+    assert schedule.amplitude(2.1 + 0.5 * 9 + 0.1) == pytest.approx(3632.0)  # 100 Hz: 3.6 kN
+    with pytest.raises(ValueError, match="f_step"):
+        frequency_steps(10.0, 130.0, 0.0, 0.5)
+
+
+def test_ramp_sweep_schedule():
+    """0 -> 125 Hz over 13 s: f(t) linear, phase the integral of f: pi f1 t^2 / T."""
+    schedule = Schedule(frequency_ramp(0.0, 125.0, 13.0), start_s=1.0)
+    for tau in (0.0, 3.0, 6.5, 13.0):
+        assert schedule.frequency(1.0 + tau) == pytest.approx(125.0 * tau / 13.0)
+        assert schedule.phase(1.0 + tau) == pytest.approx(math.pi * 125.0 * tau**2 / 13.0)
+        assert schedule.amplitude(1.0 + tau) == pytest.approx(eccentric_amplitude(125.0 * tau / 13.0))
+
+
+def test_ranked_stages_take_the_chosen_frequencies():
+    schedule = Schedule.from_dicts(
+        [
+            dict(duration_s=0.1, frequency_hz=0.0, amplitude_N=0.0),
+            dict(duration_s=0.1, frequency_hz="ranked 2", amplitude_N=3600.0),
+            dict(duration_s=0.1, frequency_hz="mode 1", amplitude_N=100.0),
+        ]
+    )
+    assert schedule.needs_modes and schedule.stages[1].ranked_number == 2
+    chosen = [
+        Excitation(68.0, "eccentric", "lead-in", 0, -1, -1, 0, "lead"),
+        Excitation(90.0, 3600.0, "modal", 5, 3, 0, 2, "second"),
+        Excitation(120.0, 3600.0, "modal", 7, 2, 1, 1, "first"),
+        Excitation(105.0, 3600.0, "control", 0, -1, -1, 0, "control"),
+    ]
+    out = _schedule_excitations(schedule, [11.0, 12.0], chosen)
+    assert [e.frequency_Hz for e in out] == [0.0, 90.0, 11.0]  # rank 2 is the 90 Hz mode
+    assert out[0].reason == "no vibration" and "second" in out[1].reason
+    assert (out[1].m, out[1].n, out[1].amplitude_N) == (3, 0, 3600.0)
+
+
+def test_imperfection_setting_gives_the_deviation_and_placement(tmp_path_factory):
+    case = _case("imperfections.tp.amplitude_m=0.5e-3", "imperfections.tp.phase_deg=10.0")
+    deviation = case.deviations()["tp"]
+    theta = np.linspace(0, 2 * np.pi, 7)
+    assert deviation(theta, 0.3 * np.ones(7)) == pytest.approx(
+        0.5e-3 * np.cos(2 * (theta - math.radians(10.0)))
+    )
+    # a processed map file beside the case: read through geometry.imperfections
+    comm = MPI.COMM_WORLD
+    folder = comm.bcast(str(tmp_path_factory.mktemp("imp")) if comm.rank == 0 else None)
+    path = f"{folder}/map.csv"
+    if comm.rank == 0:
+        rows = ["z_m,angle_deg,radial_deviation_m"]
+        for z in (0.0, 1.4):
+            rows += [f"{z},{a},{0.3e-3 * math.cos(math.radians(2 * a)):.9e}" for a in range(0, 360, 5)]
+        with open(path, "w") as f:
+            f.write("\n".join(rows) + "\n")
+    comm.barrier()
+    from_file = _case(f"imperfections.tp.file='{path}'")
+    dev = from_file.deviations()["tp"]
+    assert dev(np.radians([0.0, 45.0, 90.0]), np.full(3, 0.7)) == pytest.approx(
+        [0.3e-3, 0.0, -0.3e-3], abs=1e-9
+    )
+    # the TP is placed at first contact: 0.3 mm narrower at 90 deg -> higher by 0.3 mm / tan(alpha)
+    joint = from_file.joint
+    shift = tp_placement(joint, {"tp": ovality(0.3e-3)}) - joint.tp_offset
+    assert shift == pytest.approx(0.3e-3 / math.tan(joint.mp.half_angle), rel=1e-3)
