@@ -7,9 +7,17 @@ Prints the figures; writes the settlement history (CSV) to --output.
 
     mpirun -n 2 python benchmarks/dynamics_joint.py --ramp 2.0 --forcing 0.5
     python benchmarks/dynamics_joint.py --quick
+    python benchmarks/dynamics_joint.py --max-steps 5     # per-step profile of the first steps
+
+Default discretisation: 48 around, 0.08 m axially, 0.01 m in the contact zone, P2. After
+each stage a breakdown of the wall time per phase (pairing, contact update, residual,
+Jacobian assembly, factorisation, linear solves, bulk vectors, other;
+``benchmarks/phase_timer.py``) is printed. ``--max-steps N`` stops each stage after N
+steps (profiling); the harmonic stage then starts at the ramp's end time anyway.
 """
 
 import argparse
+import os
 import pathlib
 import sys
 import time
@@ -35,16 +43,21 @@ from solver.loads import RampedAxialForce, Schedule, Stage, TopFaceLoad, TPLoadi
 from solver.modal import clamp  # noqa: E402
 from solver.newmark import GeneralisedAlpha  # noqa: E402
 
+from phase_timer import PhaseTimer  # noqa: E402
+
 
 def main(argv=None) -> int:
     p = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     p.add_argument("--case", default="scaled")
-    p.add_argument("--n-circumferential", type=int, default=16)
-    p.add_argument("--axial-size", type=float, default=0.1, help="[m]")
+    p.add_argument("--n-circumferential", type=int, default=48)
+    p.add_argument("--axial-size", type=float, default=0.08, help="[m]")
+    p.add_argument("--contact-axial-size", type=float, default=0.01, help="axial size in the contact zone [m]")
     p.add_argument("--degree", type=int, default=2)
     p.add_argument("--mu", type=float, nargs=2, default=(0.5, 0.4), metavar=("MU_S", "MU_D"))
     p.add_argument("--d-c", type=float, default=100.0, help="friction decay [s/m]")
     p.add_argument("--gamma0", type=float, default=10.0)
+    p.add_argument("--theta", type=int, default=1, help="Nitsche variant (1, 0, -1)")
+    p.add_argument("--max-gap-change", type=float, default=None, help="gap-limited Newton steps [m]")
     p.add_argument("--ramp", type=float, default=2.0, help="self-weight ramp time [s]")
     p.add_argument("--dt-ramp", type=float, default=2e-3, help="time step of the self-weight stage [s]")
     p.add_argument("--forcing", type=float, default=0.5, help="duration of the harmonic stage [s]")
@@ -56,52 +69,70 @@ def main(argv=None) -> int:
     p.add_argument("--zeta-frequency", type=float, default=120.0, help="[Hz]")
     p.add_argument("--lagged-friction", action="store_true", help="mu from the previous step's slip speed")
     p.add_argument("--backtracks", type=int, default=4, help="Newton step halvings when ||F|| grows")
-    p.add_argument("--refactor-after", type=int, default=0,
-                   help="GMRES iterations before refactorising A + J_c (0: LU every Newton iteration; "
-                        "> 0 may deadlock on several ranks, see docs/dynamics.md)")
+    p.add_argument("--refactor-after", type=int, default=25,
+                   help="GMRES iterations before refactorising A + J_c (0: LU every Newton iteration)")
+    p.add_argument("--max-steps", type=int, default=0, help="stop each stage after this many steps (0: no limit)")
     p.add_argument("--quick", action="store_true", help="short stages (smoke run)")
     p.add_argument("--output", default="output/dynamics_joint")
+    p.add_argument("--save-displacement", action="store_true",
+                   help="write the final owned node coordinates and displacements per rank (.npy) to --output")
     a = p.parse_args(argv)
     if a.quick:
         a.ramp, a.dt_ramp, a.forcing = 0.02, 2e-3, 5 / a.frequency
     comm = MPI.COMM_WORLD
 
     joint, material, _ = load_geometry(resolve_case_path(a.case))
-    options = MeshOptions(n_circumferential=a.n_circumferential, axial_size=a.axial_size)
+    options = MeshOptions(n_circumferential=a.n_circumferential, axial_size=a.axial_size,
+                          contact_axial_size=a.contact_axial_size)
     t0 = time.perf_counter()
     data = create_joint_mesh(comm, joint, options)
     V = fem.functionspace(data.mesh, ("Lagrange", a.degree, (3,)))
     bcs = [clamp(V, data.facet_tags, [tags.MP_CLAMPED])]
     M, K = assemble_structure(V, material, bcs)
     contact = NitscheContact(V, data.facet_tags, tags.TP_CONTACT, tags.MP_CONTACT, material,
-                             FrictionLaw(*a.mu, d_c=a.d_c), gamma0=a.gamma0, theta=1,
+                             FrictionLaw(*a.mu, d_c=a.d_c), gamma0=a.gamma0, theta=a.theta,
                              lagged_friction=a.lagged_friction)
-    harmonic = Schedule([Stage(a.forcing, a.frequency, a.amplitude)], start_s=a.ramp) if a.forcing > 0 else None
+    ramp_end = min(a.ramp, a.max_steps * a.dt_ramp) if a.max_steps else a.ramp
+    harmonic = Schedule([Stage(a.forcing, a.frequency, a.amplitude)], start_s=ramp_end) if a.forcing > 0 else None
     loading = TPLoading(TopFaceLoad(V, data.facet_tags, tags.TP_TOP), static_axial=RampedAxialForce(-10e3, a.ramp),
                         schedule=harmonic)
     problem = Elastodynamics(V, M, K, bcs, load=loading, scheme=GeneralisedAlpha.from_spectral_radius(a.rho_inf),
                              damping=RayleighDamping.at_frequency(a.zeta, a.zeta_frequency), contact=contact,
-                             newton_options={"max_backtracks": a.backtracks, "refactor_after": a.refactor_after})
+                             newton_options={"max_backtracks": a.backtracks, "refactor_after": a.refactor_after,
+                                             "max_gap_change": a.max_gap_change})
     problem.initialise(0.0)
     settlement = Settlement(problem.u, joint, data.cell_tags)
     dofs = V.dofmap.index_map.size_global * 3
+    points = comm.allreduce(contact.slave.num_points, op=MPI.SUM)
     setup = time.perf_counter() - t0
-    if comm.rank == 0:
-        print(f"joint: {dofs} dofs, degree {a.degree}, {a.n_circumferential} around, {a.axial_size} m axial, "
-              f"{comm.size} rank(s); set-up {setup:.1f} s")
+    say = print if comm.rank == 0 else (lambda *args, **kw: None)
+    say(f"joint: {dofs} dofs, degree {a.degree}, {a.n_circumferential} around, {a.axial_size} m axial "
+        f"({a.contact_axial_size} m in the contact zone), {points} slave points, "
+        f"{contact.master.num_facets} master facets, {comm.size} rank(s); set-up {setup:.1f} s")
 
     out = pathlib.Path(a.output)
-    stages = [("self-weight", a.ramp, a.dt_ramp), ("harmonic", a.ramp + a.forcing, 1 / (a.frequency * a.steps_per_period))]
+    stages = [("self-weight", ramp_end, a.dt_ramp),
+              ("harmonic", ramp_end + a.forcing, 1 / (a.frequency * a.steps_per_period))]
+    if a.max_steps:
+        stages[1] = ("harmonic", ramp_end + min(a.forcing, a.max_steps * stages[1][2]), stages[1][2])
+    timer = PhaseTimer().install()
     for name, t_end, dt in stages[: 2 if a.forcing > 0 else 1]:
-        t0 = time.perf_counter()
+        timer.reset()
+        t0, cpu0 = time.perf_counter(), time.process_time()
         rows = run(problem, t_end, dt, observers=[settlement], csv_path=out / f"{name}.csv",
-                   progress=comm.rank == 0)
-        wall = time.perf_counter() - t0
+                   progress=comm.rank == 0 and not a.max_steps)
+        wall, cpu = time.perf_counter() - t0, time.process_time() - cpu0
         its = np.array([r["newton_iterations"] for r in rows])
-        if comm.rank == 0:
-            print(f"{name}: {len(rows)} steps of {dt:.3g} s, {wall / len(rows):.3f} s/step, Newton iterations "
-                  f"mean {its.mean():.2f} max {its.max()}, settlement {rows[-1]['settlement_mm']:.4f} mm, "
-                  f"wall {wall:.1f} s")
+        say(f"{name}: {len(rows)} steps of {dt:.3g} s, {wall / len(rows):.3f} s/step, Newton iterations "
+            f"mean {its.mean():.2f} max {its.max()} ({' '.join(map(str, its))}), "
+            f"settlement {rows[-1]['settlement_mm']:.6f} mm, wall {wall:.1f} s (rank 0 CPU {cpu:.1f} s; "
+            f"load average {os.getloadavg()[0]:.1f})")
+        timer.report(comm, len(rows), int(its.sum()), say)
+    timer.uninstall()
+    if a.save_displacement:
+        np.save(out / f"displacement_rank{comm.rank}_of_{comm.size}.npy",
+                np.column_stack([V.tabulate_dof_coordinates()[: V.dofmap.index_map.size_local],
+                                 problem.u.x.array.reshape(-1, 3)[: V.dofmap.index_map.size_local]]))
     return 0
 
 

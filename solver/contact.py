@@ -24,6 +24,7 @@ of the normal n_m and of the projection y with u (curvature/geometric terms of o
 lambda x rotation) are dropped.
 """
 
+import itertools
 from dataclasses import dataclass
 from enum import IntEnum
 
@@ -63,6 +64,31 @@ class ContactState:
     coordinates: npt.NDArray  #: deformed slave points x (np, 3) [m]
     weights: npt.NDArray  #: surface quadrature weights (reference configuration) [m^2]
     normal: npt.NDArray  #: n = -n_m, the contact normal pointing out of the slave (np, 3)
+
+
+_pattern_tags = itertools.count()  # unique tags of the cached Jacobians' sparsity patterns
+
+
+def _grouped_products(key: npt.NDArray, L: npt.NDArray, R: npt.NDArray):
+    """Sum of L_q^T R_q over the points q of each group of equal ``key``.
+
+    L (q, k, m), R (q, k, n). Returns the index of each group's first point and the sums
+    (groups, m, n), groups in increasing key order: the points of a group are stacked into
+    one (k x group size) product (groups padded with zero rows to the largest).
+    """
+    order = np.argsort(key, kind="stable")
+    sorted_key = key[order]
+    starts = np.flatnonzero(np.r_[True, sorted_key[1:] != sorted_key[:-1]])
+    counts = np.diff(np.r_[starts, len(key)])
+    group = np.repeat(np.arange(len(starts)), counts)
+    position = np.arange(len(key)) - starts[group]
+    shape = (len(starts), counts.max(), L.shape[1])
+    Lp = np.zeros(shape + L.shape[2:])
+    Rp = np.zeros(shape + R.shape[2:])
+    Lp[group, position] = L[order]
+    Rp[group, position] = R[order]
+    K = Lp.reshape(len(starts), -1, L.shape[2]).transpose(0, 2, 1) @ Rp.reshape(len(starts), -1, R.shape[2])
+    return order[starts], K
 
 
 class NitscheContact:
@@ -130,6 +156,7 @@ class NitscheContact:
         imap = V.dofmap.index_map
         self._slave_blocks = imap.local_to_global(self.slave.dofs.ravel()).reshape(self.slave.dofs.shape)
         self._sizes = (imap.size_local * 3, imap.size_global * 3)
+        self._matrices: dict[str, tuple] = {}  # cached Jacobian matrices with their COO pattern
         u0 = dolfinx.fem.Function(V)
         self.dt: float | None = None
         self.set_reference(u0, None)
@@ -161,8 +188,11 @@ class NitscheContact:
         disp = self.master.displacement(u)
         self._disp = disp
         x = slave.points + u_s
-        previous = self.pairing.facet if hasattr(self, "pairing") else None
-        self.pairing = p = pair(x, self.master, disp, previous=previous)
+        if hasattr(self, "pairing"):  # keep facets at kinks, warm-start the projection
+            p = pair(x, self.master, disp, previous=self.pairing.facet, previous_s=self.pairing.s)
+        else:
+            p = pair(x, self.master, disp)
+        self.pairing = p
         n = -p.normal
         grad_u = self._u_slave_nodes.transpose(0, 2, 1) @ slave.gradients
         eps = 0.5 * (grad_u + grad_u.transpose(0, 2, 1))
@@ -212,36 +242,23 @@ class NitscheContact:
         )
 
     # -- per-point operators -------------------------------------------------------------
-    def _operators(self, idx: npt.NDArray):
-        """Point operators on the local dof vector [slave cell dofs, master facet dofs] (blocked)."""
-        slave, gdim = self.slave, self.slave.gdim
-        mat = self.material
+    def _traction(self, idx: npt.NDArray) -> npt.NDArray:
+        """Slave traction operator T: T[q, i, (a, c)] = (sigma(phi_a e_c) n)_i, shape (q, 3, ns 3) [Pa m]."""
+        mat, gdim = self.material, self.slave.gdim
         n = self._n[idx]
-        n_m = -n
-        g = slave.gradients[idx]  # (q, ns, 3)
-        phi = slave.values[idx]
-        psi = self.pairing.master_values[idx]
-        ns, nm = phi.shape[1], psi.shape[1]
-        eye = np.eye(gdim)
-        # traction sigma(phi_a e_c) n, shape (q, i, a, c)
-        gn = np.einsum("pai,pi->pa", g, n)
-        T = mat.mu * (np.einsum("pa,ic->piac", gn, eye) + np.einsum("pai,pc->piac", g, n))
-        T += mat.lmbda * np.einsum("pac,pi->piac", g, n)
-        T = T.reshape(len(idx), gdim, ns * gdim)
-        Sn = np.einsum("pi,pik->pk", n, T)
-        St = T - n[:, :, None] * Sn[:, None, :]
-        # jump v_s - v_m(y), shape (q, i, ndof)
-        jump = np.concatenate(
-            [np.einsum("pa,ic->piac", phi, eye).reshape(len(idx), gdim, ns * gdim),
-             -np.einsum("pb,ic->pibc", psi, eye).reshape(len(idx), gdim, nm * gdim)],
-            axis=2,
-        )
-        zeros = np.zeros((len(idx), nm * gdim))
-        Sn = np.concatenate([Sn, zeros], axis=1)
-        St = np.concatenate([St, np.zeros((len(idx), gdim, nm * gdim))], axis=2)
-        G = np.einsum("pi,pik->pk", n_m, jump)
-        D = jump - n[:, :, None] * np.einsum("pi,pik->pk", n, jump)[:, None, :]
-        return Sn, St, G, D
+        g = self.slave.gradients[idx]  # (q, ns, 3)
+        gn = g @ n[:, :, None]  # (q, ns, 1)
+        T = mat.mu * (gn[:, None, :, :] * np.eye(gdim)[None, :, None, :]
+                      + g.transpose(0, 2, 1)[:, :, :, None] * n[:, None, None, :])
+        T += mat.lmbda * n[:, :, None, None] * g[:, None, :, :]
+        return T.reshape(len(idx), gdim, -1)
+
+    def _jump(self, idx: npt.NDArray) -> npt.NDArray:
+        """Jump operator v_s(x) - v_m(y) on [slave cell dofs, master facet dofs], shape (q, 3, nd)."""
+        gdim = self.slave.gdim
+        phi, psi = self.slave.values[idx], self.pairing.master_values[idx]
+        basis = np.concatenate([phi, -psi], axis=1)  # (q, ns + nm)
+        return (basis[:, None, :, None] * np.eye(gdim)[None, :, None, :]).reshape(len(idx), gdim, -1)
 
     def _global_dofs(self, idx: npt.NDArray) -> npt.NDArray:
         gdim = self.slave.gdim
@@ -255,19 +272,31 @@ class NitscheContact:
 
     # -- assembly ------------------------------------------------------------------------
     def residual(self) -> PETSc.Vec:
-        """Contact residual r(v) at the last update, a ghosted PETSc vector in V's layout [N]."""
-        th = self.theta
+        """Contact residual r(v) at the last update, a ghosted PETSc vector in V's layout [N].
+
+        Evaluated as r(v) = sum_q w [T^T c + jump^T j] with the slave traction operator T
+        (sigma_n(v) = n . T v, sigma_t(v) = (I - n n) T v), c = theta/gamma ((lambda_n - sigma_n) n
+        + (I - n n)(lambda_t - sigma_t)) and j = -(lambda_n n + (I - n n) lambda_t) (n_m = -n).
+        """
+        th, mat = self.theta, self.material
         rows, vals = [], []
         for idx in self._chunks():
-            Sn, St, G, D = self._operators(idx)
+            n = self._n[idx]
             gam = self.gamma[idx]
-            w = self.slave.weights[idx]
             lam_n, lam_t = self._lam_n[idx], self._lam_t[idx]
-            r = (th / gam * (lam_n - self._sigma_n[idx]))[:, None] * Sn + lam_n[:, None] * G
-            r += np.einsum("pik,pi->pk", th * St, (lam_t - self._sigma_t[idx]) / gam[:, None])
-            r -= np.einsum("pik,pi->pk", D, lam_t)
+            diff_t = lam_t - self._sigma_t[idx]
+            diff_t -= np.sum(diff_t * n, axis=1)[:, None] * n
+            c = (th / gam)[:, None] * ((lam_n - self._sigma_n[idx])[:, None] * n + diff_t)
+            j = -(lam_n[:, None] * n + lam_t - np.sum(lam_t * n, axis=1)[:, None] * n)
+            g = self.slave.gradients[idx]  # (q, ns, 3)
+            gn, gc = (g @ n[:, :, None]), (g @ c[:, :, None])
+            r_s = mat.mu * (gn * c[:, None, :] + gc * n[:, None, :])
+            r_s += mat.lmbda * np.sum(n * c, axis=1)[:, None, None] * g
+            r_s += self.slave.values[idx][:, :, None] * j[:, None, :]
+            r_m = -self.pairing.master_values[idx][:, :, None] * j[:, None, :]
+            r = np.concatenate([r_s.reshape(len(idx), -1), r_m.reshape(len(idx), -1)], axis=1)
             rows.append(self._global_dofs(idx).ravel())
-            vals.append((w[:, None] * r).ravel())
+            vals.append((self.slave.weights[idx][:, None] * r).ravel())
         return self._assemble_vector(rows, vals)
 
     def _assemble_vector(self, rows, vals) -> PETSc.Vec:
@@ -276,101 +305,111 @@ class NitscheContact:
             loc.set(0.0)
         if rows:
             rows, vals = np.concatenate(rows), np.concatenate(vals)
-            unique, inverse = np.unique(rows, return_inverse=True)
-            b.setValues(unique.astype(PETSc.IntType), np.bincount(inverse, vals), addv=PETSc.InsertMode.ADD_VALUES)
+            size = self._sizes[1]
+            touched = np.flatnonzero(np.bincount(rows, minlength=size))
+            b.setValues(touched.astype(PETSc.IntType), np.bincount(rows, vals, minlength=size)[touched],
+                        addv=PETSc.InsertMode.ADD_VALUES)
         b.assemblyBegin()
         b.assemblyEnd()
         return b
 
-    def _tangent_rows(self, idx, Sn, St, G, D, normal_tied, stick, slip, consistent: bool, gamma=None):
-        """d lambda_n (q, ndof), d lambda_t (q, 3, ndof) and the tied-point mask for the given states."""
-        gam = (self.gamma if gamma is None else gamma)[idx]
-        Bn = Sn + gam[:, None] * G
-        Bt = St - gam[:, None, None] * D
-        dlam_n = np.where(normal_tied[:, None], Bn, 0.0)  # (tied points only are used)
-        dlam_t = np.where(stick[:, None, None], Bt, 0.0)
+    def _tangent_rows(self, idx, E, jump, stick, slip, consistent: bool) -> npt.NDArray:
+        """n dlambda_n + dlambda_t (q, 3, nd) at normal-tied points, from E = T - gamma jump.
+
+        d lambda_n = n . E v; d lambda_t = (I - n n) E v at stick points, the derivative of the
+        projection onto the disk of radius mu p at slip points (``consistent``; else 0).
+        """
+        n = self._n[idx]
+        Bn = np.einsum("pi,pik->pk", n, E)
+        Bt = E - n[:, :, None] * Bn[:, None, :]
+        R = n[:, :, None] * Bn[:, None, :] + np.where(stick[:, None, None], Bt, 0.0)
         if consistent and slip.any():
             s = np.flatnonzero(slip)
             P_t = self._P_t[idx[s]]
             norm = np.linalg.norm(P_t, axis=1)
             q = P_t / norm[:, None]
             mu, p = self._mu[idx[s]], -self._lam_n[idx[s]]
-            proj = np.eye(3) - np.einsum("pi,pj->pij", q, q)
-            d = (mu * p / norm)[:, None, None] * np.einsum("pij,pjk->pik", proj, Bt[s])
+            d = (mu * p / norm)[:, None, None] * (Bt[s] - q[:, :, None] * np.einsum("pi,pik->pk", q, Bt[s])[:, None, :])
             d_radius = -mu[:, None] * Bn[s]
             if self.dt is not None and not self.lagged_friction:
                 ds = self._ds[idx[s]]
                 ds_norm = np.linalg.norm(ds, axis=1)
                 e = np.divide(ds, ds_norm[:, None], out=np.zeros_like(ds), where=ds_norm[:, None] > 0)
+                e -= np.sum(e * n[s], axis=1)[:, None] * n[s]  # e^T (I - n n) jump
                 dmu = self.friction.derivative(self._speed[idx[s]])
-                d_radius += (p * dmu / self.dt)[:, None] * np.einsum("pi,pik->pk", e, D[s])
-            dlam_t[s] = d + q[:, :, None] * d_radius[:, None, :]
-        return dlam_n, dlam_t, normal_tied
+                d_radius += (p * dmu / self.dt)[:, None] * np.einsum("pi,pik->pk", e, jump[s])
+            R[s] += d + q[:, :, None] * d_radius[:, None, :]
+        return R
 
-    def _assemble_matrix(self, tangent, theta: int | None = None, gamma=None) -> PETSc.Mat:
-        """Assemble sum_q w (-theta/gamma (Sn Sn + St St) + 1/gamma (A_n dlam_n + A_t^T dlam_t)).
+    def _assemble_matrix(self, tied, stick, slip, consistent: bool, theta: int | None = None, gamma=None,
+                         cache: str | None = None) -> PETSc.Mat:
+        """Assemble sum_q w/gamma (-theta T^T T + [theta T - gamma jump]^T (n dlam_n + dlam_t)).
 
-        The slave-only Nitsche term is summed per slave facet, the tie terms (only at points
-        whose normal is tied) per (slave facet, master facet) pair, before the COO insertion
-        (PETSc sums the remaining duplicates, also across ranks).
+        (-theta T^T T = -theta (Sn Sn + St St), the slave-only Nitsche term, at every paired point;
+        the tie term at the points ``tied``, with the states ``stick``/``slip`` per point.)
+        Point matrices are summed per slave facet (slave-only term) and per (slave facet,
+        master facet) pair (tie term) before the COO insertion (PETSc sums the remaining
+        duplicates, also across ranks). With ``cache``, the matrix and its COO pattern are
+        kept under that name and reused while the pattern is unchanged; a copy is returned.
         """
         th = self.theta if theta is None else theta
         gamma = self.gamma if gamma is None else gamma
         nq = self.slave.points_per_facet
-        nsd = self.slave.values.shape[1] * self.slave.gdim
-        rows, cols, vals = [], [], []
-
-        def add(dofs, K):
-            nd = dofs.shape[1]
-            rows.append(np.repeat(dofs, nd, axis=1).ravel())
-            cols.append(np.tile(dofs, (1, nd)).ravel())
-            vals.append(K.ravel())
-
-        def group_sum(key, K):
-            order = np.argsort(key, kind="stable")
-            key = key[order]
-            starts = np.flatnonzero(np.r_[True, key[1:] != key[:-1]])
-            return order[starts], np.add.reduceat(K[order], starts, axis=0)
-
+        gdim = self.slave.gdim
+        blocks, vals = [], []
         for idx in self._chunks():
-            Sn, St, G, D = self._operators(idx)
-            dlam_n, dlam_t, tied = tangent(idx, Sn, St, G, D)
+            T = self._traction(idx)
+            nsd = T.shape[2]
             gam = gamma[idx]
-            w = (self.slave.weights[idx] / gam)[:, None, None]
+            w = self.slave.weights[idx] / gam
             slave_facet = idx // nq
             if th != 0:
-                Ss, Ts = Sn[:, :nsd], St[:, :, :nsd]
-                Ks = -th * w * (Ss[:, :, None] * Ss[:, None, :] + Ts.transpose(0, 2, 1) @ Ts)
-                first, Ks = group_sum(slave_facet, Ks)
-                add(self._global_dofs(idx[first])[:, :nsd], Ks)
-            t = np.flatnonzero(tied)
+                L = np.sqrt(w)[:, None, None] * T
+                first, K = _grouped_products(slave_facet, L, L)
+                blocks.append(self._global_dofs(idx[first])[:, :nsd])
+                vals.append((-th * K).ravel())
+            t = np.flatnonzero(tied[idx])
             if t.size:
-                An = th * Sn[t] + gam[t, None] * G[t]
-                At = th * St[t] - gam[t, None, None] * D[t]
-                K = w[t] * (An[:, :, None] * dlam_n[t][:, None, :] + At.transpose(0, 2, 1) @ dlam_t[t])
-                key = slave_facet[t] * self.master.num_facets + self.pairing.facet[idx[t]]
-                first, K = group_sum(key, K)
-                add(self._global_dofs(idx[t[first]]), K)
-        A = PETSc.Mat().create(comm=self.V.mesh.comm)
-        A.setSizes((self._sizes, self._sizes), bsize=3)
-        A.setType(PETSc.Mat.Type.AIJ)
-        if rows:
-            rows, cols, vals = np.concatenate(rows), np.concatenate(cols), np.concatenate(vals)
+                it = idx[t]
+                jump = self._jump(it)
+                T_full = np.concatenate([T[t], np.zeros((len(t), gdim, jump.shape[2] - nsd))], axis=2)
+                E = T_full - gam[t, None, None] * jump
+                R = self._tangent_rows(it, E, jump, stick[it], slip[it], consistent)
+                F = w[t, None, None] * (th * T_full - gam[t, None, None] * jump)
+                key = slave_facet[t] * self.master.num_facets + self.pairing.facet[it]
+                first, K = _grouped_products(key, F, R)
+                blocks.append(self._global_dofs(it[first]))
+                vals.append(K.ravel())
+        vals = np.concatenate(vals) if vals else np.zeros(0)
+        cached = self._matrices.get(cache)
+        same = cached is not None and len(cached[0]) == len(blocks) and all(
+            np.array_equal(a, b) for a, b in zip(cached[0], blocks))
+        if self.V.mesh.comm.allreduce(same, op=MPI.LAND):  # the COO preallocation is collective
+            A = cached[1]
         else:
-            rows = cols = np.zeros(0, PETSc.IntType)
-            vals = np.zeros(0)
-        A.setPreallocationCOO(rows.astype(PETSc.IntType), cols.astype(PETSc.IntType))
+            A = PETSc.Mat().create(comm=self.V.mesh.comm)
+            A.setSizes((self._sizes, self._sizes), bsize=3)
+            A.setType(PETSc.Mat.Type.AIJ)
+            rows = [np.repeat(d, d.shape[1], axis=1).ravel() for d in blocks]
+            cols = [np.tile(d, (1, d.shape[1])).ravel() for d in blocks]
+            rows = np.concatenate(rows) if rows else np.zeros(0)
+            cols = np.concatenate(cols) if cols else np.zeros(0)
+            A.setPreallocationCOO(rows.astype(PETSc.IntType), cols.astype(PETSc.IntType))
+            if cache is not None:
+                if cached is not None:
+                    cached[1].destroy()
+                self._matrices[cache] = (blocks, A, next(_pattern_tags))
         A.setValuesCOO(vals, addv=PETSc.InsertMode.INSERT_VALUES)
         A.assemble()
-        return A
+        if cache is None:
+            return A
+        J = A.copy()
+        J.setAttr("coo_pattern", self._matrices[cache][2])  # same tag: same sparsity
+        return J
 
     def jacobian(self) -> PETSc.Mat:
         """Generalized-Newton Jacobian of the contact residual at the last update [N/m]."""
-        return self._assemble_matrix(
-            lambda idx, Sn, St, G, D: self._tangent_rows(
-                idx, Sn, St, G, D, self._active[idx], self._stick[idx], self._slip[idx], consistent=True
-            )
-        )
+        return self._assemble_matrix(self._active, self._stick, self._slip, consistent=True, cache="jacobian")
 
     def interface_stiffness(self, status: npt.NDArray | Status, theta: int | None = None,
                             gamma0: float | None = None) -> PETSc.Mat:
@@ -394,15 +433,8 @@ class NitscheContact:
         status = np.broadcast_to(np.asarray(status, dtype=np.int8), (self.slave.num_points,))
         if not np.isin(status, list(Status)).all():
             raise ValueError("status values must be Status.OPEN, Status.STICK or Status.SLIP")
-        tied = status != Status.OPEN
-        stick = status == Status.STICK
-        return self._assemble_matrix(
-            lambda idx, Sn, St, G, D: self._tangent_rows(
-                idx, Sn, St, G, D, tied[idx], stick[idx], np.zeros(len(idx), bool), consistent=False, gamma=gamma
-            ),
-            theta=theta,
-            gamma=gamma,
-        )
+        return self._assemble_matrix(status != Status.OPEN, status == Status.STICK, np.zeros(len(status), bool),
+                                     consistent=False, theta=theta, gamma=gamma)
 
     def band_status(self, height: float, axis: int = 2) -> npt.NDArray:
         """STICK for slave points within ``height`` [m] of the slave surface's lowest point along

@@ -167,7 +167,11 @@ class Elastodynamics:
             out.axpy(scale, self._work)
 
     def _effective_load(self, dt: float) -> None:
-        """b = (f_{n+1-alpha_f} - alpha_f r_c,n - M a_hat - C v_hat - K u_hat) / (1 - alpha_f)."""
+        """b = (f_{n+1-alpha_f} - alpha_f r_c,n - M a_hat - C v_hat - K u_hat) / (1 - alpha_f).
+
+        With Rayleigh damping C = a M + b K this takes two products: M (a_hat + a v_hat) and
+        K (b v_hat + u_hat).
+        """
         af = self.scheme.alpha_f
         u, v, a = (x.x.petsc_vec.array_r for x in (self.u, self.v, self.a))
         a_hat, v_hat, u_hat = self.scheme.history(u, v, a, dt)
@@ -177,25 +181,23 @@ class Elastodynamics:
         b.axpy(af, self._f_old)
         if af:
             b.axpy(-af, self._r_contact_old)
+        rayleigh = isinstance(self.damping, RayleighDamping)
+        on_mass = a_hat if self.scheme.dynamic else None
+        on_stiffness = u_hat if af else None
+        if self.scheme.dynamic and rayleigh:
+            on_mass = a_hat + self.damping.a * v_hat
+            if self.damping.b:
+                on_stiffness = self.damping.b * v_hat + (u_hat if af else 0.0)
         hist = self.K.createVecRight()
-        if self.scheme.dynamic:
-            hist.array_w[:] = a_hat
-            self.M.mult(hist, self._work)
-            b.axpy(-1.0, self._work)
-            hist.array_w[:] = v_hat
-            if isinstance(self.damping, RayleighDamping):
-                self.M.mult(hist, self._work)
-                b.axpy(-self.damping.a, self._work)
-                self.K.mult(hist, self._work)
-                b.axpy(-self.damping.b, self._work)
-            elif isinstance(self.damping, ModalDamping):
-                hist.array_w[:] = v + (1.0 - af) * dt * a  # predicted v_{n+1-alpha_f}
-                self._work.set(0.0)
-                self.damping.mult(hist, self._work)
+        for matrix, values in ((self.M, on_mass), (self.K, on_stiffness)):
+            if values is not None:
+                hist.array_w[:] = values
+                matrix.mult(hist, self._work)
                 b.axpy(-1.0, self._work)
-        if af:
-            hist.array_w[:] = u_hat
-            self.K.mult(hist, self._work)
+        if self.scheme.dynamic and isinstance(self.damping, ModalDamping):
+            hist.array_w[:] = v + (1.0 - af) * dt * a  # predicted v_{n+1-alpha_f}
+            self._work.set(0.0)
+            self.damping.mult(hist, self._work)
             b.axpy(-1.0, self._work)
         hist.destroy()
         b.scale(1.0 / (1.0 - af))
@@ -322,7 +324,10 @@ def run(problem: Elastodynamics, t_end: float, dt: float, dt_min: float | None =
     rows, writer, h, accepted = [], None, dt, 0
     try:
         while problem.t < t_end - 1e-12 * t_end:
-            step = min(h, t_end - problem.t)
+            remaining = t_end - problem.t
+            # a last step within round-off of h is taken as h: a new step size would mean a new
+            # effective operator A(dt) and its factorisation
+            step = h if abs(remaining - h) <= 1e-9 * h else min(h, remaining)
             result = problem.step(step)
             if not result.converged:
                 h = step / 2

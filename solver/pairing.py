@@ -58,8 +58,26 @@ def _clip_to_facet(s: npt.NDArray, facet_cell: basix.CellType) -> npt.NDArray:
     return s
 
 
+def _box_data(element: basix.finite_element.FiniteElement):
+    """(element, vertex dofs, (bi)linear vertex interpolation at the nodes (nodes, vertices),
+    Lebesgue constant max_s sum_j |N_j(s)| sampled on a fine grid with a 5 % margin)."""
+    vertices = np.array([dofs[0] for dofs in element.entity_dofs[0]])
+    linear = basix.create_element(basix.ElementFamily.P, element.cell_type, 1)
+    interpolation = linear.tabulate(0, element.points)[0, :, :, 0]
+    t = np.linspace(0.0, 1.0, 101)
+    s = np.array([(a, b) for a in t for b in t if element.cell_type == basix.CellType.quadrilateral or a + b <= 1])
+    lebesgue = 1.05 * float(np.abs(element.tabulate(0, s)[0, :, :, 0]).sum(axis=1).max())
+    return element, vertices, interpolation, lebesgue
+
+
 class _CellElements:
-    """Scalar coordinate and displacement elements of a single-cell-type mesh, per-facet closures."""
+    """Scalar coordinate and displacement elements of a single-cell-type mesh, per-facet closures.
+
+    On a facet, the cell basis functions of the facet's closure dofs restrict to the
+    facet Lagrange element of the same degree and variant: N_closure(s) = R[lf] N_facet(s)
+    with R[lf][i, j] = N_closure_i(s_j) at the facet element's points s_j. Facet points are
+    therefore evaluated with the (cheaper) facet element.
+    """
 
     def __init__(self, V: dolfinx.fem.FunctionSpace):
         mesh = V.mesh
@@ -81,6 +99,30 @@ class _CellElements:
         vlayout = V.dofmap.dof_layout
         self.coord_closure = np.array([clayout.entity_closure_dofs(self.tdim - 1, i) for i in range(nlf)])
         self.closure = np.array([vlayout.entity_closure_dofs(self.tdim - 1, i) for i in range(nlf)])
+        self.facet_coord_element, self.coord_restriction = self._restriction(self.coord_element, self.coord_closure)
+        self.facet_element, self.restriction = self._restriction(self.element, self.closure)
+        same = (self.element.family, self.element.degree, self.element.lagrange_variant) == (
+            self.coord_element.family, self.coord_element.degree, self.coord_element.lagrange_variant)
+        if same:  # one tabulation serves both
+            self.facet_element = self.facet_coord_element
+        self.coord_box = _box_data(self.facet_coord_element)  # for MasterSurface.distance_bound
+        self.box = _box_data(self.facet_element)
+
+    def _restriction(self, element, closure: npt.NDArray):
+        """Facet element of ``element`` and the maps R[lf] (ncl, nfacet_dofs) onto the closure dofs."""
+        facet = basix.create_element(element.family, self.facet_cell, element.degree, element.lagrange_variant)
+        nlf = len(self.origin)
+        s = facet.points
+        R = np.array([self.tabulate(element, self.reference_points(np.full(len(s), lf), s), 0)[0][:, closure[lf]].T
+                      for lf in range(nlf)])
+        # check at points off the facet element's nodes that the restriction is exact
+        s_check = np.array([[0.21, 0.13], [0.37, 0.52], [0.11, 0.71]])
+        N_facet = facet.tabulate(0, s_check)[0, :, :, 0]
+        for lf in range(nlf):
+            N_cell = self.tabulate(element, self.reference_points(np.full(len(s_check), lf), s_check), 0)[0]
+            if not np.allclose(N_cell[:, closure[lf]], N_facet @ R[lf].T, atol=1e-12):
+                raise ValueError("contact needs Lagrange elements whose facet traces are facet Lagrange elements")
+        return facet, R
 
     def reference_points(self, lf: npt.NDArray, s: npt.NDArray) -> npt.NDArray:
         """Reference-cell coordinates of facet points (lf[i], s[i])."""
@@ -92,6 +134,12 @@ class _CellElements:
             return np.zeros((1 + self.tdim if nderiv else 1, 0, element.dim))
         tab = element.tabulate(nderiv, X)[..., 0]
         return tab[: 1 + self.tdim] if nderiv else tab
+
+    def tabulate_facet(self, element: basix.finite_element.FiniteElement, s: npt.NDArray) -> npt.NDArray:
+        """Values and s-derivatives of a facet element's basis at facet points s, shape (3, npts, ndofs)."""
+        if len(s) == 0:
+            return np.zeros((3, 0, element.dim))
+        return element.tabulate(1, s)[..., 0]
 
 
 def _facets_with_cells(mesh: dolfinx.mesh.Mesh, facet_tags: dolfinx.mesh.MeshTags, tag: int):
@@ -150,6 +198,16 @@ class MasterSurface:
         self.blocks = _gather(comm, blocks.astype(np.int64))  #: global block (node) indices (nF, ncl)
         self.orientation = _gather(comm, orientation)
         self.num_local = len(facets)
+        #: deformation-free positions at the facet element's nodes (nF, nfc, gdim) [m]
+        self.facet_coords = np.einsum("fij,fid->fjd", el.coord_restriction[self.local_facet], self.coords)
+        self.sizes = self._sizes()  #: facet sizes (largest node distance from the centre) [m], search scales
+        centre = np.full((self.num_facets, 2), 0.5 if el.facet_cell == basix.CellType.quadrilateral else 1 / 3)
+        dN = el.tabulate_facet(el.facet_coord_element, centre)[1:]
+        t = _gradient(dN, self.facet_coords)  # (nF, gdim, 2)
+        t1 = t[:, :, 0] / np.linalg.norm(t[:, :, 0], axis=1)[:, None]
+        nrm = np.cross(t[:, :, 0], t[:, :, 1])
+        nrm /= np.linalg.norm(nrm, axis=1)[:, None]
+        self.frames = np.stack([t1, np.cross(nrm, t1), nrm], axis=1)  #: facet frames (nF, 3, 3), rows unit vectors
 
     @property
     def num_facets(self) -> int:
@@ -160,25 +218,53 @@ class MasterSurface:
         values = u.x.array.reshape(-1, self.elements.gdim)[self._nodes]
         return _gather(self.comm, values)
 
-    def evaluate(self, facet: npt.NDArray, s: npt.NDArray, disp: npt.NDArray):
-        """Deformed position y, tangents dy/ds (npts, gdim, 2) and displacement basis values at (facet, s)."""
+    def facet_displacement(self, disp: npt.NDArray) -> npt.NDArray:
+        """Displacement (nF, ncl, gdim) at the nodes of the facet element, shape (nF, nf, gdim) [m]."""
+        return np.einsum("fij,fid->fjd", self.elements.restriction[self.local_facet], disp)
+
+    def evaluate(self, facet: npt.NDArray, s: npt.NDArray, facet_disp: npt.NDArray):
+        """Deformed position y, tangents dy/ds (npts, gdim, 2) and displacement basis values (closure
+        dofs) at (facet, s); ``facet_disp`` from ``facet_displacement``."""
         el = self.elements
-        lf = self.local_facet[facet]
-        X = el.reference_points(lf, s)
-        rows = np.arange(len(facet))[:, None]
-        cg = el.tabulate(el.coord_element, X, 1)[:, rows, el.coord_closure[lf]]
-        cv = el.tabulate(el.element, X, 1)[:, rows, el.closure[lf]]
-        y = _combine(cg[0], self.coords[facet]) + _combine(cv[0], disp[facet])
-        dydX = _gradient(cg[1:], self.coords[facet]) + _gradient(cv[1:], disp[facet])
-        dyds = dydX @ el.axes[lf]
+        cg = el.tabulate_facet(el.facet_coord_element, s)
+        cv = cg if el.facet_element is el.facet_coord_element else el.tabulate_facet(el.facet_element, s)
+        y = _combine(cg[0], self.facet_coords[facet]) + _combine(cv[0], facet_disp[facet])
+        dyds = _gradient(cg[1:], self.facet_coords[facet]) + _gradient(cv[1:], facet_disp[facet])
         return y, dyds, cv[0]
+
+    def closure_values(self, facet: npt.NDArray, facet_values: npt.NDArray) -> npt.NDArray:
+        """Facet-element basis values (npts, nf) as values of the cell's closure basis (npts, ncl)."""
+        return (self.elements.restriction[self.local_facet[facet]] @ facet_values[:, :, None])[:, :, 0]
+
+    def distance_bound(self, x: npt.NDArray, facet: npt.NDArray, facet_disp: npt.NDArray) -> npt.NDArray:
+        """Lower bound of the distance [m] from points x (n, gdim) to the deformed facets ``facet`` (n,).
+
+        In each facet's frame (tangents and normal at its reference centre) a coordinate of a
+        point of the facet is c(s) = l(s) + sum_j N_j(s) e_j, with l the (bi)linear interpolant
+        of the vertex values (between their min and max) and e_j = c_j - l(s_j) at the nodes
+        (|sum_j N_j e_j| <= Lambda max |e_j|, Lambda the Lebesgue constant of the facet
+        element): the facet lies in that oriented box, and the distance to the box is the bound.
+        """
+        el = self.elements
+        frame = self.frames[facet]  # (n, 3, 3), rows: unit vectors
+
+        def box(nodal, element, vertices, linear, lebesgue):
+            local = frame @ nodal[facet].transpose(0, 2, 1)  # (n, 3, nodes)
+            corners = local[:, :, vertices]
+            bulge = lebesgue * np.abs(local - corners @ linear.T).max(axis=2)
+            return corners.max(axis=2) + bulge, corners.min(axis=2) - bulge
+
+        hi_X, lo_X = box(self.facet_coords, *el.coord_box)
+        hi_d, lo_d = box(facet_disp, *el.box)
+        local = (frame @ x[:, :, None])[:, :, 0]
+        excess = np.maximum(np.maximum(local - hi_X - hi_d, lo_X + lo_d - local), 0.0)
+        return (1 - 1e-9) * np.linalg.norm(excess, axis=1)
 
     def centroids(self, disp: npt.NDArray) -> npt.NDArray:
         """Approximate deformed facet centres (mean of closure nodes) [m]."""
         return self.coords.mean(axis=1) + disp.mean(axis=1)
 
-    def sizes(self) -> npt.NDArray:
-        """Facet sizes (largest node distance from the centre) [m], used as search scales."""
+    def _sizes(self) -> npt.NDArray:
         c = self.coords.mean(axis=1)
         return np.linalg.norm(self.coords - c[:, None, :], axis=2).max(axis=1)
 
@@ -234,6 +320,26 @@ class SlaveQuadrature:
         return _combine(self.values, values)
 
 
+def _closest_on_facets(x: npt.NDArray, facet: npt.NDArray, s: npt.NDArray, master: MasterSurface,
+                       facet_disp: npt.NDArray, max_iterations: int, tol: float) -> tuple[npt.NDArray, npt.NDArray]:
+    """Closest points of x (n, gdim) on the given deformed facets: Gauss-Newton on the facet
+    coordinates from s (n, 2) (modified), clipped to the facet. Returns s and |x - y| [m]."""
+    moving = np.arange(len(x))
+    for _ in range(max_iterations):
+        y, dyds, _ = master.evaluate(facet[moving], s[moving], facet_disp)
+        r = x[moving] - y
+        dydsT = dyds.transpose(0, 2, 1)
+        step = np.linalg.solve(dydsT @ dyds, dydsT @ r[:, :, None])[..., 0]
+        s_new = _clip_to_facet(s[moving] + step, master.elements.facet_cell)
+        change = np.abs(s_new - s[moving]).max(axis=1)
+        s[moving] = s_new
+        moving = moving[change >= tol]
+        if moving.size == 0:
+            break
+    y, _, _ = master.evaluate(facet, s, facet_disp)
+    return s, np.linalg.norm(x - y, axis=1)
+
+
 @dataclass
 class Pairing:
     """Closest points of slave points on the deformed master surface (arrays over slave points).
@@ -263,6 +369,7 @@ def pair(
     max_iterations: int = 30,
     tol: float = 1e-14,
     previous: npt.NDArray | None = None,
+    previous_s: npt.NDArray | None = None,
 ) -> Pairing:
     """Project deformed slave points x (np, gdim) onto the deformed master surface.
 
@@ -274,11 +381,15 @@ def pair(
     ``previous`` (facet per point from an earlier pairing) keeps a point on its facet while
     that facet is as close as the best candidate to within 1e-6 facet sizes: near a kink of
     the C0 master surface two facets are equally close and round-off would otherwise flip
-    the choice (and the normal) between Newton iterations.
+    the choice (and the normal) between Newton iterations. With ``previous_s`` (the facet
+    coordinates of that pairing), Gauss-Newton on the previous facet starts there instead of at
+    the facet centre (a few iterations fewer; the same point to the tolerance ``tol``).
+    Candidates other than the nearest centre's are only projected on when a lower bound of
+    their distance (``MasterSurface.distance_bound``) does not rule them out.
     """
     el = master.elements
     npts = len(x)
-    sizes = master.sizes()
+    sizes = master.sizes
     radius = float(sizes.max()) if search_radius is None else search_radius
     k = min(candidates, master.num_facets)
     if npts == 0:
@@ -287,36 +398,37 @@ def pair(
             np.zeros(0), np.zeros((0, el.closure.shape[1])),
         )
     _, cand = cKDTree(master.centroids(disp)).query(x, k=k)
-    cand = cand.reshape(npts, k).ravel()
-    xp = np.repeat(x, k, axis=0)
-    centre = 0.5 if el.facet_cell == basix.CellType.quadrilateral else 1 / 3
-    s = np.full((len(cand), 2), centre)
-    moving = np.arange(len(cand))
-    for _ in range(max_iterations):
-        y, dyds, _ = master.evaluate(cand[moving], s[moving], disp)
-        r = xp[moving] - y
-        dydsT = dyds.transpose(0, 2, 1)
-        step = np.linalg.solve(dydsT @ dyds, dydsT @ r[:, :, None])[..., 0]
-        s_new = _clip_to_facet(s[moving] + step, el.facet_cell)
-        change = np.abs(s_new - s[moving]).max(axis=1)
-        s[moving] = s_new
-        moving = moving[change >= tol]
-        if moving.size == 0:
-            break
-    y, dyds, _ = master.evaluate(cand, s, disp)
-    dist = np.linalg.norm(xp - y, axis=1).reshape(npts, k)
+    cand = cand.reshape(npts, k)
+    facet_disp = master.facet_displacement(disp)
+    s = np.zeros((npts, k, 2))
+    dist = np.full((npts, k), np.inf)
+    s[:] = 0.5 if el.facet_cell == basix.CellType.quadrilateral else 1 / 3
+    if previous is not None and previous_s is not None:  # warm start on the previous facet
+        same = cand == previous[:, None]
+        s[same] = np.repeat(previous_s[:, None, :], k, axis=1)[same]
+    s[:, 0], dist[:, 0] = _closest_on_facets(x, cand[:, 0], s[:, 0], master, facet_disp, max_iterations, tol)
+    if k > 1:
+        # only candidates that can be as close as the nearest-centre facet (to the tolerance
+        # of ``previous``), by a lower bound of the distance to a facet
+        rows, cols = np.divmod(np.arange(npts * (k - 1)), k - 1)
+        cols += 1
+        lower = master.distance_bound(x[rows], cand[rows, cols], facet_disp)
+        near = lower <= dist[rows, 0] + 1e-6 * sizes[cand[rows, cols]]
+        rows, cols = rows[near], cols[near]
+        s[rows, cols], dist[rows, cols] = _closest_on_facets(x[rows], cand[rows, cols], s[rows, cols], master,
+                                                             facet_disp, max_iterations, tol)
     best = np.argmin(dist, axis=1)
     if previous is not None:
-        cand_2d = cand.reshape(npts, k)
-        match = cand_2d == previous[:, None]
+        match = cand == previous[:, None]
         keep = match.any(axis=1)
         j = np.argmax(match, axis=1)
         rows = np.arange(npts)
-        close = dist[rows, j] <= dist[rows, best] + 1e-6 * sizes[cand_2d[rows, j]]
+        close = dist[rows, j] <= dist[rows, best] + 1e-6 * sizes[cand[rows, j]]
         best = np.where(keep & close, j, best)
-    pick = np.arange(npts) * k + best
-    facet, s = cand[pick], s[pick]
-    y, dyds, values = master.evaluate(facet, s, disp)
+    rows = np.arange(npts)
+    facet, s = cand[rows, best], s[rows, best]
+    y, dyds, values = master.evaluate(facet, s, facet_disp)
+    values = master.closure_values(facet, values)
     normal = np.cross(dyds[:, :, 0], dyds[:, :, 1])
     normal *= (master.orientation[facet] / np.linalg.norm(normal, axis=1))[:, None]
     r = x - y

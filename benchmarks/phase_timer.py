@@ -1,0 +1,122 @@
+"""Wall time per phase of the contact time step, by instrumenting solver methods (benchmarks only).
+
+``PhaseTimer.install()`` wraps, at class level, the methods that make up a step of
+``solver.dynamics.Elastodynamics`` with contact and accumulates *exclusive* wall
+time (a phase nested in another is not counted twice) per phase:
+
+    pairing            solver.pairing.pair (closest-point projection)
+    contact update     NitscheContact.update without the pairing (state at the iterate)
+    contact residual   NitscheContact.residual
+    contact jacobian   NitscheContact.jacobian (+ Dirichlet row zeroing, copy into A + J)
+    factorisation      ContactNewtonSolver._factorise (A + J_c copy and LU)
+    linear solves      ContactNewtonSolver._correction without the factorisation (GMRES)
+    bulk vectors       Elastodynamics._effective_load, load evaluation, Newmark update, A u
+    other              the rest of Elastodynamics.step
+
+Times are this rank's; ``report`` prints rank 0's, with the number of calls of each phase
+(e.g. factorisations, pairings).
+"""
+
+import functools
+import time
+from collections import defaultdict
+
+import solver.contact
+import solver.dynamics
+import solver.nonlinear
+import solver.pairing
+
+PHASES = ["pairing", "contact update", "contact residual", "contact jacobian", "factorisation",
+          "linear solves", "bulk vectors", "other"]
+
+
+class PhaseTimer:
+    """Exclusive wall time per phase of Elastodynamics.step (see module docstring)."""
+
+    def __init__(self):
+        self.totals: dict[str, float] = defaultdict(float)
+        self.cpu: dict[str, float] = defaultdict(float)  #: process CPU time per phase [s]
+        self.calls: dict[str, int] = defaultdict(int)
+        self.gmres = 0  #: GMRES iterations
+        self._stack: list[list] = []  # [phase, start, cpu start, wall and cpu time spent in nested phases]
+        self._undo: list = []
+
+    def _enter(self, phase: str) -> None:
+        self._stack.append([phase, time.perf_counter(), time.process_time(), 0.0, 0.0])
+
+    def _exit(self) -> None:
+        phase, start, cpu_start, nested, nested_cpu = self._stack.pop()
+        elapsed, cpu = time.perf_counter() - start, time.process_time() - cpu_start
+        self.totals[phase] += elapsed - nested
+        self.cpu[phase] += cpu - nested_cpu
+        self.calls[phase] += 1
+        if self._stack:
+            self._stack[-1][3] += elapsed
+            self._stack[-1][4] += cpu
+
+    def _wrap(self, owner, name: str, phase: str) -> None:
+        original = getattr(owner, name)
+
+        @functools.wraps(original)
+        def timed(*args, **kwargs):
+            self._enter(phase)
+            try:
+                return original(*args, **kwargs)
+            finally:
+                self._exit()
+
+        setattr(owner, name, timed)
+        self._undo.append((owner, name, original))
+
+    def install(self) -> "PhaseTimer":
+        NC, CN, ED = solver.contact.NitscheContact, solver.nonlinear.ContactNewtonSolver, solver.dynamics.Elastodynamics
+        self._wrap(ED, "step", "other")
+        self._wrap(solver.contact, "pair", "pairing")
+        self._wrap(NC, "update", "contact update")
+        self._wrap(NC, "residual", "contact residual")
+        self._wrap(NC, "jacobian", "contact jacobian")
+        self._wrap(CN, "_factorise", "factorisation")
+        self._wrap(CN, "_correction", "linear solves")
+        for name in ("_effective_load", "_evaluate_load", "_assemble_operator"):
+            self._wrap(ED, name, "bulk vectors")
+        self._count_gmres(CN)
+        return self
+
+    def _count_gmres(self, CN) -> None:
+        """Count GMRES iterations of the Newton corrections (NewtonResult.linear_iterations)."""
+        original = CN.solve
+
+        @functools.wraps(original)
+        def counted(*args, **kwargs):
+            result = original(*args, **kwargs)
+            self.gmres += sum(result.linear_iterations)
+            return result
+
+        CN.solve = counted
+        self._undo.append((CN, "solve", original))
+
+    def uninstall(self) -> None:
+        for owner, name, original in reversed(self._undo):
+            setattr(owner, name, original)
+        self._undo.clear()
+
+    def reset(self) -> None:
+        self.totals.clear()
+        self.cpu.clear()
+        self.calls.clear()
+        self.gmres = 0
+
+    def report(self, comm, steps: int, iterations: int, say=print) -> None:
+        """Print wall s/step, s/Newton iteration and CPU s/step of each phase (rank 0's times) and the
+        slowest rank's wall time per step. On a shared machine the CPU time is the load-independent figure."""
+        total, total_cpu = sum(self.totals.values()), sum(self.cpu.values())
+        worst = comm.allreduce(total, op=__import__("mpi4py").MPI.MAX)
+        say(f"  phase breakdown (rank 0, {steps} steps, {iterations} Newton iterations, {self.gmres} GMRES "
+            f"iterations, {self.calls.get('factorisation', 0)} factorisations; "
+            f"slowest rank {worst / max(steps, 1):.3f} s/step):")
+        for phase in PHASES:
+            t = self.totals.get(phase, 0.0)
+            say(f"    {phase:17s} {t / max(steps, 1):8.3f} s/step {t / max(iterations, 1):8.3f} s/iteration "
+                f"{100 * t / total if total else 0:5.1f} %  CPU {self.cpu.get(phase, 0.0) / max(steps, 1):7.3f} s/step"
+                f"  ({self.calls.get(phase, 0)} calls)")
+        say(f"    {'total':17s} {total / max(steps, 1):8.3f} s/step{'':33s}CPU {total_cpu / max(steps, 1):7.3f} s/step")
