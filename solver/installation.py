@@ -604,6 +604,36 @@ def build_joint_model(comm: MPI.Comm, case: InstallationCase) -> JointModel:
     )
 
 
+def settled_modes(model: JointModel, n_modes: int) -> tuple[ModalResult, ContactInterface]:
+    """The ``n_modes`` lowest modes of the joint in its current contact state (collective).
+
+    Small vibrations about the settled, resting joint: every slave point in contact is tied
+    normally and tangentially (STICK), the others are free. (A point that slipped in the
+    last step is at rest now; tying only its normal motion would let the TP slide and rock
+    on the thin contact band: spurious modes near 0 Hz.) The interface tangent is the
+    symmetric Nitsche one (theta = 1) at the same pairing, as the eigenproblem needs.
+    """
+    contact, c = model.contact, model.case.contact
+    if contact.theta != 1:
+        contact = NitscheContact(
+            model.V,
+            model.mesh_data.facet_tags,
+            getattr(tags, c.slave),
+            getattr(tags, c.master),
+            model.case.material,
+            model.case.friction,
+            gamma0=c.gamma0,
+            theta=1,
+        )
+        contact.update(model.problem.u)
+    status = np.where(model.contact.state.status == Status.OPEN, Status.OPEN, Status.STICK)
+    interface = ContactInterface(contact, status)
+    result = modal_analysis(
+        model.V, model.case.material, model.bcs, [interface], EigenOptions(n_modes=n_modes)
+    )
+    return result, interface
+
+
 # -- frequency choice -----------------------------------------------------------------------
 @dataclass(frozen=True)
 class Excitation:
@@ -942,26 +972,6 @@ class Installation:
             ]
         return Schedule(stages, start_s=start_s)
 
-    def _symmetric_contact(self) -> NitscheContact:
-        """The run's contact, or (theta != 1) a symmetric copy paired at the current displacement:
-        the modal stage needs a symmetric interface tangent (same slave points, same status)."""
-        contact, c = self.model.contact, self.case.contact
-        if contact.theta == 1:
-            return contact
-        tags_ = self.model.mesh_data.facet_tags
-        symmetric = NitscheContact(
-            self.model.V,
-            tags_,
-            getattr(tags, c.slave),
-            getattr(tags, c.master),
-            self.case.material,
-            self.case.friction,
-            gamma0=c.gamma0,
-            theta=1,
-        )
-        symmetric.update(self.model.problem.u)
-        return symmetric
-
     def _modal_stage(self) -> None:
         """Modes of the settled joint (contact tangent at its current status); frequency choice.
 
@@ -970,21 +980,7 @@ class Installation:
         t0 = time.perf_counter()
         records: list[ModeRecord] = []
         if vib.modal_stage:
-            # small vibrations about the settled state: every touching point sticks (a point
-            # that slipped in the last step of the stage is at rest now; with only its normal
-            # tied, the TP could slide and rock freely on the thin contact band: spurious ~0 Hz
-            # modes)
-            status = np.where(
-                model.contact.state.status == Status.OPEN, Status.OPEN, Status.STICK
-            )
-            interface = ContactInterface(self._symmetric_contact(), status)
-            result = modal_analysis(
-                model.V,
-                self.case.material,
-                model.bcs,
-                [interface],
-                EigenOptions(n_modes=vib.n_modes),
-            )
+            result, interface = settled_modes(model, vib.n_modes)
             parts = JointParts.for_joint(model.V, model.mesh_data, model.placed)
             nodes_around = self.case.mesh.n_circumferential * self.case.contact.degree
             records = describe_modes(
