@@ -11,8 +11,9 @@ modes.csv, frequencies.csv, plots, summary.txt).
 
 Without options: the very coarse frictional joint of the demos/install.py default run
 (8 around, 0.25 m; the contact settings with which the frictional Newton solve converges),
-short stages. --quick: the tiny frictionless joint (a smoke run: without friction nothing holds
-the TP, so the pull alone separates it).
+short stages. --quick: the tiny joint with the landing contact settings and very short stages
+(a smoke run: the TP is still sliding at the end of its 12 ms self-weight ramp, so little
+normal force has built up and the pull alone separates it).
 
 Usage: mpirun -n 2 python demos/dismount.py [--pull 20e3] [--pull-ramp 0.05] [--pull-hold 0.05]
        [--install-stages 0] [--n-frequencies 2] [--stage-duration 0.03] [--amplitude 3600]
@@ -62,7 +63,7 @@ def main(argv: list[str] | None = None) -> int:
         f"stage(s), pull {plan.pull_N / 1e3:.1f} kN up (ramp {plan.ramp_s} s, alone {plan.hold_s} s), "
         f"then {plan.n_frequencies} stage(s) of pull + {plan.amplitude_N:.0f} N at the ranked "
         f"frequencies, {plan.stage_duration_s} s each"
-        + (" [--quick: tiny frictionless joint, a smoke run]" if args.quick else ""))
+        + (" [--quick: tiny joint, very short stages, a smoke run]" if args.quick else ""))
     runner, code = demo_cli.run(comm, case, args.output, progress=not args.no_progress)
     if runner.model is None or len(runner.stages) < 2:
         return code

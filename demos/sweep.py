@@ -14,7 +14,7 @@ the installation outputs (history.csv, stages.csv with the gain per step, modes.
 
 Without options: the very coarse frictional joint of the demos/install.py default run and
 steps of 0.03 s (the SPEC's 0.5 s steps: --dwell 0.5, about 16 x longer). --quick: the tiny
-frictionless joint, three 4 ms steps (a smoke run, not physics).
+joint (demos' common quick settings), three 2 ms steps (a smoke run, not physics).
 
 Usage: mpirun -n 2 python demos/sweep.py [--sweep steps|ramp] [--f-start HZ] [--f-stop HZ]
        [--f-step HZ] [--dwell S] [--ramp-duration S] [--amplitude eccentric|N]
@@ -42,7 +42,7 @@ SWEEPS = {
     "ramp": {"f_start": 0.0, "f_stop": 125.0, "ramp_duration": 1.0},
 }
 QUICK_SWEEPS = {
-    "steps": {"f_start": 40.0, "f_stop": 120.0, "f_step": 40.0, "dwell": 0.004},
+    "steps": {"f_start": 40.0, "f_stop": 120.0, "f_step": 40.0, "dwell": 0.002},
     "ramp": {"f_start": 0.0, "f_stop": 125.0, "ramp_duration": 0.012},
 }
 
@@ -103,7 +103,7 @@ def main(argv: list[str] | None = None) -> int:
             f"{values['dwell']:g} s ({len(stages)} steps)" if args.sweep == "steps" else
             f"linear ramp {values['f_start']:g} -> {values['f_stop']:g} Hz over {values['ramp_duration']:g} s")
     log(f"sweep: {what}, amplitude {args.amplitude}"
-        + (" [--quick: tiny frictionless joint, a smoke run]" if args.quick else ""))
+        + (" [--quick: tiny joint, very short stages, a smoke run]" if args.quick else ""))
     runner, code = demo_cli.run(comm, case, args.output, progress=not args.no_progress)
     if runner.model is None or len(runner.stages) < 2:
         return code

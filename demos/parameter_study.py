@@ -1,0 +1,106 @@
+"""One-at-a-time parameter study of the installation (SPEC 4, 5.6; docs/install.md "Parameter
+study").
+
+From a base case (reference friction mu_s/mu_d = 0.5/0.4, d_c = 100 s/m, Rayleigh damping),
+each variant changes one thing: friction 0.0625/0.05, d_c = 1 s/m, modal damping, the axial
+mesh size halved. Every variant runs the installation pipeline (self-weight, modal stage, one
+stage at the best-ranked natural frequency and one at the non-modal control frequency, 3.6 kN)
+into its own sub-folder of --output. Written as the study goes: summary.csv (settlement per
+stage per variant, mm) and summary.png (settlement gained per stage and variant).
+
+Without options: the very coarse frictional joint of the demos/install.py default run (8
+around, 0.25 m; about 10 minutes per variant on 2 cores). --quick: the tiny joint with the
+landing contact settings, a 12 ms self-weight ramp and one 2 ms stage at 100 Hz (eccentric
+amplitude) without the modal stage, for every variant (a smoke run, not physics).
+
+Usage: mpirun -n 2 python demos/parameter_study.py [--variants low_friction slow_decay ...]
+       [--case scaled] [--set table.key=value ...] [--quick] [--output DIR]
+"""
+
+import sys
+import time
+from pathlib import Path
+
+sys.path.insert(0, str(Path(__file__).resolve().parent.parent))  # run from a checkout
+
+from solver import backend  # noqa: F401,E402  (before dolfinx)
+
+from mpi4py import MPI  # noqa: E402
+
+from solver import demo_cli, report  # noqa: E402
+from solver.parameter_study import (  # noqa: E402
+    SUMMARY_COLUMNS,
+    plot_summary,
+    select,
+    summary_rows,
+    variants,
+)
+
+DEFAULT = demo_cli.COARSE_FRICTIONAL + [
+    "vibration.n_modes=20",
+    "vibration.lead_in_hz=[]",
+    "vibration.n_frequencies=1",
+    "vibration.stage_duration_s=0.03",
+    "output.paraview=false",
+]
+QUICK = demo_cli.QUICK + [
+    "vibration.modal_stage=false",
+    "schedule=[{duration_s = 0.002, frequency_hz = 100.0, amplitude_N = 'eccentric'}]",
+    "damping.n_modes=4",
+    "output.plots=false",
+]
+
+
+def main(argv: list[str] | None = None) -> int:
+    p = demo_cli.parser(__doc__.splitlines()[0], "output/parameter_study")
+    p.add_argument("--variants", nargs="+", metavar="NAME",
+                   help="run only these variants besides the base case "
+                   "(low_friction, slow_decay, modal_damping, fine_mesh)")
+    args = p.parse_args(argv)
+    comm = MPI.COMM_WORLD
+    log = demo_cli.say(comm)
+    items = demo_cli.overrides(args, DEFAULT, QUICK)
+    try:
+        base = demo_cli.load_case(args, items)
+        study = variants(base.mesh.axial_size)
+        if args.variants is not None:
+            study = select(study, args.variants)
+        cases = [demo_cli.load_case(args, items + list(v.overrides)) for v in study]
+    except ValueError as e:
+        return demo_cli.fail(comm, str(e))
+    out = Path(args.output)
+    log(f"parameter study: {len(study)} runs ({', '.join(v.name for v in study)}) into {out}/<name>"
+        + (" [--quick: tiny joint, one 2 ms stage, a smoke run]" if args.quick else ""))
+    rows: list[dict] = []
+    code = 0
+    for k, (variant, case) in enumerate(zip(study, cases)):
+        log(f"\n[{k + 1}/{len(study)}] {variant.name}: {variant.parameter} = {variant.value}")
+        wall = time.perf_counter()
+        try:
+            runner, status_code = demo_cli.run(comm, case, out / variant.name,
+                                               progress=not args.no_progress, log=lambda s: None)
+            status = "done" if status_code == 0 else "stopped"
+        except ValueError as e:  # e.g. modal damping: time step above its stability limit
+            log(f"  not run: {e}")
+            status, runner = "invalid", None
+        if status != "done":
+            code = 1
+        if runner is not None:
+            new = summary_rows(variant, runner.stages, runner.excitations, status)
+            rows += new
+            for r in new:
+                log(f"  {r['name']:>12} {r['role']:>11} {r['frequency_Hz']:8.2f} Hz: "
+                    f"gained {r['gained_mm']:+.4f} mm, settlement {r['settlement_end_mm']:.4f} mm")
+        log(f"  {status} in {time.perf_counter() - wall:.1f} s")
+        report.write_table(rows, SUMMARY_COLUMNS, out / "summary.csv", comm)
+        plot_summary(rows, out / "summary.png", comm)
+    log(f"\nsummary: {out / 'summary.csv'}, {out / 'summary.png'}")
+    if comm.rank == 0:
+        finals = {r["variant"]: r["settlement_end_mm"] for r in rows}
+        for name, s in finals.items():
+            print(f"  {name:>14}: final settlement {s:.4f} mm", flush=True)
+    return code
+
+
+if __name__ == "__main__":
+    sys.exit(main())
