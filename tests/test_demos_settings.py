@@ -159,3 +159,76 @@ def test_imperfection_setting_gives_the_deviation_and_placement(tmp_path_factory
     joint = from_file.joint
     shift = tp_placement(joint, {"tp": ovality(0.3e-3)}) - joint.tp_offset
     assert shift == pytest.approx(0.3e-3 / math.tan(joint.mp.half_angle), rel=1e-3)
+
+
+def test_dismount_case_sequence():
+    from solver.dismount import DismountPlan, dismount_case
+
+    plan = DismountPlan(pull_N=30e3, ramp_s=0.05, hold_s=0.1, n_install=2, n_frequencies=3,
+                        stage_duration_s=0.1, amplitude_N=3600.0)
+    data = read_case("scaled", ["self_weight.ramp_time_s=2.0", "self_weight.hold_s=0.1"])
+    dismount_case(data, plan)
+    case = InstallationCase.from_dict(data)
+    frequencies = [s.frequency_hz for s in case.schedule.stages]
+    assert frequencies == ["ranked 1", "ranked 2", 0.0, 0.0, "ranked 1", "ranked 2", "ranked 3"]
+    assert plan.roles() == ["install"] * 2 + ["pull ramp", "pull alone"] + ["pull + vibration"] * 3
+    assert case.vibration.n_frequencies == 3
+    force = case.static_force.history(case.self_weight)
+    t_sw = 2.1
+    # self-weight held through the two installation stages, then ramped to the pull over 0.05 s
+    assert force(t_sw + 0.2) == pytest.approx(-10e3)
+    assert force(t_sw + 0.225) == pytest.approx(10e3)  # halfway from -10 to +30 kN
+    assert force(t_sw + 0.25) == pytest.approx(30e3) and force(t_sw + 0.7) == pytest.approx(30e3)
+    with pytest.raises(ValueError, match="positive"):
+        DismountPlan(pull_N=-5e3)
+    with pytest.raises(ValueError, match="n_install"):
+        DismountPlan(n_install=-1)
+
+
+def test_dismount_table_motion_and_separation():
+    """Synthetic history: the TP goes up 0.5 mm in the pull stage but keeps contact, then
+    rises 3 mm with zero normal force."""
+    from solver.dismount import dismount_table
+
+    def row(stage, t, s, normal, contact):
+        return {"stage": stage, "time_s": t, "settlement_mm": s, "normal_force_N": normal,
+                "amplitude_N": 0.0, "axial_force_N": 0.0, "stick_fraction": contact,
+                "slip_fraction": 0.0}
+
+    history = [row(0, 1.0, 5.0, 4e4, 0.2), row(1, 1.1, 4.5, 3e4, 0.1), row(2, 1.2, 1.5, 0.0, 0.0)]
+
+    def stage(k, s0, s1, t0, t1):
+        return {"stage": k, "start_s": t0, "end_s": t1, "frequency_Hz": 0.0,
+                "settlement_start_mm": s0, "settlement_end_mm": s1}
+
+    stages = [stage(0, 0.0, 5.0, 0.0, 1.0), stage(1, 5.0, 4.5, 1.0, 1.1), stage(2, 4.5, 1.5, 1.1, 1.2)]
+    table = dismount_table(history, stages, ["pull ramp", "pull alone"], lambda t: 2e4)
+    assert [r["axial_motion_mm"] for r in table] == pytest.approx([0.5, 3.0])
+    assert [r["separated"] for r in table] == [False, True]
+    assert table[0]["static_force_end_N"] == 2e4 and table[1]["open_fraction_end"] == 1.0
+
+
+def test_parameter_study_varies_one_thing_at_a_time():
+    from solver.parameter_study import select, variants
+
+    study = variants(0.25)
+    base = _case()
+    assert [v.name for v in study][0] == "base" and study[0].overrides == ()
+    changed = {}
+    for v in study[1:]:
+        case = _case(*v.overrides)
+        diff = {
+            name
+            for name in ("friction", "damping", "mesh", "contact", "time", "vibration")
+            if getattr(case, name) != getattr(base, name)
+        }
+        changed[v.parameter] = diff
+    assert changed == {"friction": {"friction"}, "d_c": {"friction"}, "damping": {"damping"},
+                       "mesh size": {"mesh"}}
+    low = _case(*study[1].overrides).friction
+    assert (low.mu_s, low.mu_d) == (0.0625, 0.05)
+    assert _case(*study[2].overrides).friction.d_c == 1.0
+    assert _case(*study[4].overrides).mesh.axial_size == 0.125
+    assert [v.name for v in select(study, ["slow_decay"])] == ["base", "slow_decay"]
+    with pytest.raises(ValueError, match="unknown variant"):
+        select(study, ["wet_friction"])
