@@ -634,6 +634,25 @@ def settled_modes(model: JointModel, n_modes: int) -> tuple[ModalResult, Contact
     return result, interface
 
 
+def attach_vibration(model: JointModel, schedule: Schedule) -> None:
+    """Apply the harmonic ``schedule`` to the TP through the case's forcing ([vibration]):
+    "face" spreads it over the TP top face, "eccentric" puts it at a point of the top edge,
+    "shaker" at ``shaker_height_m`` above the TP's lower end (both at ``angle_deg``)."""
+    vib = model.case.vibration
+    loading: TPLoading = model.problem.load
+    if vib.forcing == "face":
+        loading.schedule = schedule
+    else:
+        j = model.placed
+        if vib.forcing == "eccentric":
+            point = shaker_point(j.tp, j.tp_offset, j.tp.total_length, vib.angle_deg)
+            point[2] -= 1e-6 * j.tp.total_length  # just inside the top face
+        else:
+            point = shaker_point(j.tp, j.tp_offset, vib.shaker_height_m, vib.angle_deg)
+        loading.shaker = (PointLoad(model.V, point), schedule)
+    model.problem.refresh_load()
+
+
 # -- frequency choice -----------------------------------------------------------------------
 @dataclass(frozen=True)
 class Excitation:
@@ -1026,19 +1045,7 @@ class Installation:
         plans = self.plans[1:]
         if not plans:
             return
-        schedule = self._schedule(plans[0].start_s)
-        loading: TPLoading = model.problem.load
-        if vib.forcing == "face":
-            loading.schedule = schedule
-        else:
-            j = model.placed
-            if vib.forcing == "eccentric":
-                point = shaker_point(j.tp, j.tp_offset, j.tp.total_length, vib.angle_deg)
-                point[2] -= 1e-6 * j.tp.total_length  # just inside the top face
-            else:
-                point = shaker_point(j.tp, j.tp_offset, vib.shaker_height_m, vib.angle_deg)
-            loading.shaker = (PointLoad(model.V, point), schedule)
-        model.problem.refresh_load()
+        attach_vibration(model, self._schedule(plans[0].start_s))
 
     def run(
         self, resume: bool = False, stop_after_checkpoints: int | None = None
