@@ -30,16 +30,26 @@ from solver import backend  # noqa: F401,E402  (before dolfinx)
 from mpi4py import MPI  # noqa: E402
 
 from solver import demo_cli  # noqa: E402
-from solver.dismount import DismountPlan, dismount_case, dismount_table, plot, write_table  # noqa: E402
+from solver.dismount import (  # noqa: E402
+    DismountPlan,
+    dismount_case,
+    dismount_table,
+    plot,
+    write_table,
+)
 
-DEFAULT = demo_cli.COARSE_FRICTIONAL + ["vibration.n_modes=20"]
+#: the coarse joint is stiff (8 around locks, SPEC 4): its modes start near 140 Hz, so ranked
+#: frequencies up to 700 Hz are allowed
+DEFAULT = demo_cli.COARSE_FRICTIONAL + ["vibration.n_modes=20", "vibration.max_frequency_hz=700"]
 QUICK_PLAN = {"ramp_s": 0.004, "hold_s": 0.012, "stage_duration_s": 0.004, "n_frequencies": 1}
 
 
 def main(argv: list[str] | None = None) -> int:
     p = demo_cli.parser(__doc__.splitlines()[0], "output/dismount")
-    p.add_argument("--pull", type=float, default=20e3, help="upward pulling force [N] (SPEC 3: 10-40 kN)")
-    p.add_argument("--pull-ramp", type=float, help="ramp from the self-weight force to the pull [s] (0.05)")
+    p.add_argument("--pull", type=float, default=20e3,
+                   help="upward pulling force [N] (SPEC 3: 10-40 kN)")
+    p.add_argument("--pull-ramp", type=float,
+                   help="ramp from the self-weight force to the pull [s] (0.05)")
     p.add_argument("--pull-hold", type=float, help="pull alone, held [s] (0.05)")
     p.add_argument("--install-stages", type=int, default=0,
                    help="vibration stages at the ranked frequencies before pulling (0)")
@@ -53,14 +63,16 @@ def main(argv: list[str] | None = None) -> int:
              "stage_duration_s": args.stage_duration, "n_frequencies": args.n_frequencies}
     base = QUICK_PLAN if args.quick else {"stage_duration_s": 0.03, "n_frequencies": 2}
     try:
-        plan = DismountPlan(pull_N=args.pull, n_install=args.install_stages, amplitude_N=args.amplitude,
+        plan = DismountPlan(pull_N=args.pull, n_install=args.install_stages,
+                            amplitude_N=args.amplitude,
                             **{**base, **{k: v for k, v in given.items() if v is not None}})
         case = demo_cli.load_case(args, demo_cli.overrides(args, DEFAULT, demo_cli.QUICK),
                                   lambda data: dismount_case(data, plan))
     except ValueError as e:
         return demo_cli.fail(comm, str(e))
-    log(f"dismount: {-case.self_weight.force_N / 1e3:.1f} kN self-weight, {plan.n_install} installation "
-        f"stage(s), pull {plan.pull_N / 1e3:.1f} kN up (ramp {plan.ramp_s} s, alone {plan.hold_s} s), "
+    log(f"dismount: {-case.self_weight.force_N / 1e3:.1f} kN self-weight, {plan.n_install} "
+        f"installation stage(s), pull {plan.pull_N / 1e3:.1f} kN up (ramp {plan.ramp_s} s, "
+        f"alone {plan.hold_s} s), "
         f"then {plan.n_frequencies} stage(s) of pull + {plan.amplitude_N:.0f} N at the ranked "
         f"frequencies, {plan.stage_duration_s} s each"
         + (" [--quick: tiny joint, very short stages, a smoke run]" if args.quick else ""))

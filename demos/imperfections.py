@@ -121,7 +121,8 @@ def plot_map(deviation: DeviationMap, path: Path) -> None:
 def main(argv: list[str] | None = None) -> int:
     p = demo_cli.parser(__doc__.splitlines()[0], "output/imperfections")
     p.add_argument("--scan", help="TP scan or map file (CSV); default: write a synthetic scan")
-    p.add_argument("--ovality-mm", type=float, default=0.3, help="synthetic scan: m = 2 ovality [mm]")
+    p.add_argument("--ovality-mm", type=float, default=0.3,
+                   help="synthetic scan: m = 2 ovality [mm]")
     p.add_argument("--mp-ovality-mm", type=float, default=0.0, help="m = 2 ovality of the MP [mm]")
     p.add_argument("--no-run", action="store_true", help="only the maps, no installation run")
     p.add_argument("--modal", action="store_true", help="modal stage after self-weight (modes.csv)")
@@ -162,9 +163,9 @@ def main(argv: list[str] | None = None) -> int:
         deviation = read_imperfection(scan, joint.tp)
         write_map(deviation, out / "tp_deviation_map.csv")
         plot_map(deviation, out / "tp_deviation.png")
-        print(f"processed TP map: {deviation.z.size} stations x {deviation.deviation.shape[1]} angles, "
-              f"deviation {deviation.deviation.min() * 1e3:+.3f} .. {deviation.deviation.max() * 1e3:+.3f} mm",
-              flush=True)
+        dev = deviation.deviation
+        print(f"processed TP map: {deviation.z.size} stations x {dev.shape[1]} angles, "
+              f"deviation {dev.min() * 1e3:+.3f} .. {dev.max() * 1e3:+.3f} mm", flush=True)
         imperfections = {"tp": deviation}
         if args.mp_ovality_mm:
             imperfections["mp"] = ovality(1e-3 * args.mp_ovality_mm)
@@ -178,17 +179,20 @@ def main(argv: list[str] | None = None) -> int:
         print(f"rigid contact: first contact at overlap {first * 1e3:.2f} mm (perfect cones "
               f"{joint.overlap * 1e3:.2f} mm): the imperfect TP sits "
               f"{(first - joint.overlap) * -1e3:.2f} mm higher; first touch at "
-              f"{math.degrees(imperfect.theta[k[1]]):.0f} deg, {imperfect.zeta[k[0]] * 1e3:.0f} mm above "
-              "the TP's lower edge", flush=True)
+              f"{math.degrees(imperfect.theta[k[1]]):.0f} deg, "
+              f"{imperfect.zeta[k[0]] * 1e3:.0f} mm above the TP's lower edge", flush=True)
         for target in (0.05, 0.25, 0.5):
             rows = []
             for name, cmap in (("imperfect", imperfect), ("perfect", perfect)):
                 reached = cmap.overlaps[cmap.contact_fraction >= target]
-                slide = (reached[0] - cmap.first_contact_overlap) * 1e3 if reached.size else math.nan
+                first_touch = cmap.first_contact_overlap
+                slide = (reached[0] - first_touch) * 1e3 if reached.size else math.nan
                 rows.append(f"{name} {slide:.1f} mm")
-            print(f"  {target:.0%} of the TP cone in contact after sliding: " + ", ".join(rows), flush=True)
+            print(f"  {target:.0%} of the TP cone in contact after sliding: " + ", ".join(rows),
+                  flush=True)
         with open(out / "contact_fraction.csv", "w") as f:
-            f.write("overlap_mm,imperfect_contact_fraction_percent,perfect_contact_fraction_percent\n")
+            f.write("overlap_mm,imperfect_contact_fraction_percent,"
+                    "perfect_contact_fraction_percent\n")
             lo = max(imperfect.overlaps[0], perfect.overlaps[0])
             hi = min(imperfect.overlaps[-1], perfect.overlaps[-1])
             for o in np.linspace(lo, hi, 201):

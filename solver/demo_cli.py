@@ -62,7 +62,7 @@ NAMED = {
     "mu_d": ("friction.mu_d", float, "dynamic friction coefficient"),
     "d_c": ("friction.d_c", float, "friction decay coefficient [s/m]"),
     "damping": ("damping.model", str, "damping model: rayleigh | modal"),
-    "forcing": ("vibration.forcing", str, "where the vibration force acts: eccentric | face | shaker"),
+    "forcing": ("vibration.forcing", str, "vibration force at: eccentric | face | shaker"),
     "direction": ("vibration.direction", str, "vibration force direction: axial | lateral | both"),
     "steps_per_period": ("time.steps_per_period", int, "time steps per excitation period"),
 }
@@ -117,12 +117,13 @@ def load_case(
 def run(comm: MPI.Comm, case: InstallationCase, output: str | Path, progress: bool = True,
         log: Callable[[str], None] | None = None) -> tuple[Installation, int]:
     """Run the installation pipeline of ``case``; returns the runner and the exit code
-    (0 done, 1 the time loop gave up: results up to there are in ``output``)."""
+    (0 done, 1 stopped: the time loop gave up, or the modal stage found fewer ranked
+    frequencies than the schedule asks for; results up to there are in ``output``)."""
     runner = Installation(comm, case, output, log=log, progress=progress)
     try:
         runner.run()
-    except RuntimeError as e:  # Newton failed at the minimum step
-        if comm.rank == 0:
+    except (RuntimeError, ValueError) as e:  # Newton failed at the minimum step; a 'ranked k'
+        if comm.rank == 0:  # stage beyond the frequencies the modal stage found
             print(f"\nrun stopped: {e}\nresults up to this point are in {output}",
                   file=sys.stderr, flush=True)
         return runner, 1

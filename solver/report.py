@@ -355,7 +355,8 @@ def plot_sweep(
                  alpha=0.3, label="gained per stage")
     lo, hi = f.min(), f.max()
     for k, fn in enumerate(x for x in natural_hz if lo <= x <= hi):
-        ax_f.axvline(fn, color="tab:blue", ls=":", lw=0.8, label="natural frequency" if k == 0 else None)
+        label = "natural frequency" if k == 0 else None
+        ax_f.axvline(fn, color="tab:blue", ls=":", lw=0.8, label=label)
     ax_f.set_xlabel("excitation frequency [Hz]")
     ax_f.set_ylabel("settlement gained [mm]")
     ax_f.legend(loc="best", fontsize=8)

@@ -58,7 +58,8 @@ def test_imperfection_reaches_the_mesh():
     theta = np.arctan2(x[:, 1], x[:, 0])
     deviation = np.hypot(x[:, 0], x[:, 1]) - joint.tp.inner_radius(x[:, 2] - tp_z)
     expected = amplitude * np.cos(2 * (theta - math.radians(phase)))
-    worst = MPI.COMM_WORLD.allreduce(float(np.max(np.abs(deviation - expected), initial=0.0)), op=MPI.MAX)
+    local = float(np.max(np.abs(deviation - expected), initial=0.0))
+    worst = MPI.COMM_WORLD.allreduce(local, op=MPI.MAX)
     print(f"\nTP placed {shift * 1e3:.4f} mm higher; node deviation error {worst * 1e9:.3g} nm")
     assert worst < 1e-9  # nodes moved exactly (to round-off) by the ovality
     assert model.settlement()["settlement_mm"] == pytest.approx(0.0, abs=1e-12)  # probes inside
@@ -82,7 +83,8 @@ def test_dismount_pull_lifts_the_frictionless_tp(tmp_path_factory):
     print("\n" + "\n".join(
         f"{r['role']}: motion {r['axial_motion_mm']:+.4f} mm, normal force "
         f"{r['normal_force_end_N']:.1f} N, separated {r['separated']}" for r in table)
-        + f"\nself-weight settlement {runner.stages[0]['settlement_end_mm']:.4f} mm, final {s[-1]:.4f} mm")
+        + f"\nself-weight settlement {runner.stages[0]['settlement_end_mm']:.4f} mm, "
+        f"final {s[-1]:.4f} mm")
     assert runner.stages[0]["settlement_end_mm"] > 0  # installed first
     assert [r["role"] for r in table] == ["pull ramp", "pull alone"]
     hold = table[-1]

@@ -108,7 +108,8 @@ def test_ramp_sweep_schedule():
     for tau in (0.0, 3.0, 6.5, 13.0):
         assert schedule.frequency(1.0 + tau) == pytest.approx(125.0 * tau / 13.0)
         assert schedule.phase(1.0 + tau) == pytest.approx(math.pi * 125.0 * tau**2 / 13.0)
-        assert schedule.amplitude(1.0 + tau) == pytest.approx(eccentric_amplitude(125.0 * tau / 13.0))
+        f = 125.0 * tau / 13.0
+        assert schedule.amplitude(1.0 + tau) == pytest.approx(eccentric_amplitude(f))
 
 
 def test_ranked_stages_take_the_chosen_frequencies():
@@ -146,7 +147,8 @@ def test_imperfection_setting_gives_the_deviation_and_placement(tmp_path_factory
     if comm.rank == 0:
         rows = ["z_m,angle_deg,radial_deviation_m"]
         for z in (0.0, 1.4):
-            rows += [f"{z},{a},{0.3e-3 * math.cos(math.radians(2 * a)):.9e}" for a in range(0, 360, 5)]
+            rows += [f"{z},{a},{0.3e-3 * math.cos(math.radians(2 * a)):.9e}"
+                     for a in range(0, 360, 5)]
         with open(path, "w") as f:
             f.write("\n".join(rows) + "\n")
     comm.barrier()
@@ -201,7 +203,8 @@ def test_dismount_table_motion_and_separation():
         return {"stage": k, "start_s": t0, "end_s": t1, "frequency_Hz": 0.0,
                 "settlement_start_mm": s0, "settlement_end_mm": s1}
 
-    stages = [stage(0, 0.0, 5.0, 0.0, 1.0), stage(1, 5.0, 4.5, 1.0, 1.1), stage(2, 4.5, 1.5, 1.1, 1.2)]
+    stages = [stage(0, 0.0, 5.0, 0.0, 1.0), stage(1, 5.0, 4.5, 1.0, 1.1),
+              stage(2, 4.5, 1.5, 1.1, 1.2)]
     table = dismount_table(history, stages, ["pull ramp", "pull alone"], lambda t: 2e4)
     assert [r["axial_motion_mm"] for r in table] == pytest.approx([0.5, 3.0])
     assert [r["separated"] for r in table] == [False, True]
