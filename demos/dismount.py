@@ -35,6 +35,7 @@ from solver.dismount import (  # noqa: E402
     dismount_case,
     dismount_table,
     plot,
+    pull_out_force,
     write_table,
 )
 
@@ -83,7 +84,14 @@ def main(argv: list[str] | None = None) -> int:
     table = dismount_table(runner.history, runner.stages, plan.roles(), runner.model.static)
     write_table(table, out / "dismount.csv", comm)
     plot(runner.history, table, out / "dismount.png", comm)
-    log("\ndismount (axial motion: + = the TP moved up)")
+    installed = [r for r in runner.history if r["stage"] == plan.n_install][-1]
+    normal, alpha = installed["normal_force_N"], case.joint.mp.half_angle
+    low, high = (pull_out_force(normal, mu, alpha)
+                 for mu in (case.friction.mu_d, case.friction.mu_s))
+    log(f"\ninstalled state: settlement {installed['settlement_mm']:.4f} mm, contact normal force "
+        f"{normal / 1e3:.2f} kN; rigid Coulomb pull-out estimate N (mu cos(alpha) - sin(alpha)) "
+        f"= {low / 1e3:.2f} kN (mu_d) .. {high / 1e3:.2f} kN (mu_s)")
+    log("dismount (axial motion: + = the TP moved up)")
     for row in table:
         f = f"{row['frequency_Hz']:7.2f} Hz" if row["frequency_Hz"] else "    --    "
         log(f"  {row['role']:>16} {f}  static force {row['static_force_end_N'] / 1e3:+7.2f} kN  "

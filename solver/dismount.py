@@ -12,11 +12,16 @@ at 'ranked 1', 'ranked 2', ... with the pull held (``[[schedule]]``).
 negative = the TP moved up) and whether it separated: the contact normal force at the end of
 the stage below ``separation_fraction`` of the normal force at the end of the self-weight
 stage (0 when every contact point is open). SI units: N, s, mm in the tables as named.
+
+:func:`pull_out_force` is the rigid Coulomb estimate of the pull that frees a TP held on the
+cone half-angle alpha by the normal force N: P = N (mu cos(alpha) - sin(alpha)) (the wedge's
+normal force pushes the TP up by N sin(alpha), friction holds it down by at most mu N cos(alpha)).
 """
 
 from __future__ import annotations
 
 import csv
+import math
 import os
 from collections.abc import Callable
 from dataclasses import dataclass
@@ -104,6 +109,12 @@ def dismount_case(case: dict[str, Any], plan: DismountPlan) -> None:
     vibration = case.setdefault("vibration", {})
     needed = max(plan.n_install, plan.n_frequencies)
     vibration["n_frequencies"] = max(int(vibration.get("n_frequencies", 3)), needed)
+
+
+def pull_out_force(normal_N: float, mu: float, alpha_rad: float) -> float:
+    """Upward pull [N] that overcomes friction mu on a cone of half-angle alpha [rad] pressed by
+    the total normal force ``normal_N`` [N]: N (mu cos(alpha) - sin(alpha)) (rigid, Coulomb)."""
+    return normal_N * (mu * math.cos(alpha_rad) - math.sin(alpha_rad))
 
 
 def dismount_table(
