@@ -52,7 +52,7 @@ DISMOUNT_COLUMNS = [
 class DismountPlan:
     """The dismount sequence after the self-weight stage (SI units)."""
 
-    pull_N: float = 20e3  #: pulling (upward) static force [N], SPEC 3: 10-40 kN
+    pull_N: float = 6e3  #: pulling (upward) static force [N] (SPEC 3 rig: 10-40 kN)
     ramp_s: float = 0.05  #: ramp from the self-weight force to the pull [s]
     hold_s: float = 0.05  #: pull alone, held [s]
     n_install: int = 0  #: installation stages (ranked frequencies, self-weight held) before
