@@ -188,13 +188,19 @@ def plot(history: list[dict[str, float]], table: list[dict[str, Any]], path: Pat
     ax_f.set_xlabel("time [s]")
     ax_f.set_ylabel("force [kN]")
     ax_f.legend(loc="best", fontsize=8)
-    colours = {"install": "tab:green", "pull ramp": "tab:orange", "pull alone": "tab:orange",
+    colours = {"install": "tab:green", "pull ramp": "tab:orange", "pull alone": "gold",
                "pull + vibration": "tab:purple"}
+    seen = set()
     for row in table:
         for a in (ax, ax_f):
-            a.axvspan(row["start_s"], row["end_s"], color=colours[row["role"]], alpha=0.12)
-        ax.annotate(row["role"], (0.5 * (row["start_s"] + row["end_s"]), 1.0),
-                    xycoords=("data", "axes fraction"), ha="center", va="bottom", fontsize=7)
+            label = row["role"] if a is ax and row["role"] not in seen else None
+            a.axvspan(row["start_s"], row["end_s"], color=colours[row["role"]], alpha=0.15,
+                      label=label)
+        seen.add(row["role"])
+    if table:  # the dismount stages and the end of the installation before them
+        t0, t1 = table[0]["start_s"], table[-1]["end_s"]
+        ax.set_xlim(t0 - 0.3 * (t1 - t0), t1)
+    ax.legend(loc="best", fontsize=8)
     fig.tight_layout()
     fig.savefig(path, dpi=120)
     plt.close(fig)
