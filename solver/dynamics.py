@@ -219,7 +219,17 @@ class Elastodynamics:
             # initial guess: constant-acceleration (dynamic) or constant-velocity (quasi-static) predictor
             self.u.x.array[:] += dt * self.v.x.array + 0.5 * dt**2 * self.a.x.array
             res = solve_contact_problem(self.A, self._b, self.contact, self.u, self.bcs, solver=self._newton)
-            result = StepResult(res.converged, res.iterations, res.residual_norms, res.message)
+            iterations = res.iterations
+            if not res.converged:
+                # The predictor extrapolates the slip. Where the TP reverses or stops (stick-slip)
+                # it slides on in the predictor, and with the slip direction fixed the linearised
+                # friction has a negative stiffness along it (about -mu gamma sin(alpha) per unit
+                # area on the cone): Newton leaves by centimetres. Retry from u_n (no slip yet)
+                # before the caller cuts the step (docs/contact.md, section 6).
+                self.u.x.array[:] = u_old
+                res = solve_contact_problem(self.A, self._b, self.contact, self.u, self.bcs, solver=self._newton)
+                iterations += res.iterations
+            result = StepResult(res.converged, iterations, res.residual_norms, res.message)
         if not result.converged:
             self.u.x.array[:] = u_old
             return result
