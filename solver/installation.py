@@ -1022,10 +1022,12 @@ class Installation:
             self.excitations = _schedule_excitations(
                 self.case.schedule, self.natural_frequencies, chosen
             )
-        schedule = self._schedule(model.problem.t)
-        self.plans += _plan_vibration(
-            schedule, self.case.time.steps_per_period, [e.reason for e in self.excitations]
-        )
+        if self.excitations:  # (none: the run ends after the modal stage)
+            self.plans += _plan_vibration(
+                self._schedule(model.problem.t),
+                self.case.time.steps_per_period,
+                [e.reason for e in self.excitations],
+            )
         report.write_choice(self.excitations, self.output / "frequencies.csv", self.comm)
         if vib.modal_stage:
             self.log(
