@@ -55,7 +55,6 @@ DEFAULT = [
     "mesh.n_circumferential=8",
     "mesh.axial_size=0.25",
     "mesh.contact_axial_size=0.01",
-    "self_weight.dt_s=0.02",
     "contact.theta=-1",
     "contact.gamma0=1.0",
     "contact.max_gap_change=1e-5",
