@@ -11,6 +11,7 @@ own sub-folder; :func:`summary_rows` collects the settlement per stage and varia
 from __future__ import annotations
 
 import os
+import textwrap
 from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
@@ -118,8 +119,8 @@ def plot_summary(rows: list[dict[str, Any]], path: Path, comm: MPI.Comm) -> None
                                                       if r["frequency_Hz"] else "")
                       for r in rows if r["stage"] == k and r["variant"] == names[0]), f"stage {k}")
         ax.bar(x + (k - 0.5 * (n_stages - 1)) * width, gain, width, label=label)
-    labels = [next(f"{r['variant']}\n{r['value']}" + ("" if r["status"] == "done" else
-                                                      f"\n[{r['status']}]")
+    labels = [next(f"{r['variant']}\n{textwrap.fill(r['value'], 20)}"
+                   + ("" if r["status"] == "done" else f"\n[{r['status']}]")
                    for r in rows if r["variant"] == n) for n in names]
     ax.set_xticks(x, labels, fontsize=7)
     ax.set_ylabel("settlement gained in the stage [mm]")
