@@ -9,11 +9,14 @@ Prints the figures; writes the settlement history (CSV) to --output.
     python benchmarks/dynamics_joint.py --quick
     python benchmarks/dynamics_joint.py --max-steps 5     # per-step profile of the first steps
 
-Default discretisation: 48 around, 0.08 m axially, 0.01 m in the contact zone, P2. After
-each stage a breakdown of the wall time per phase (pairing, contact update, residual,
-Jacobian assembly, factorisation, linear solves, bulk vectors, other;
-``benchmarks/phase_timer.py``) is printed. ``--max-steps N`` stops each stage after N
-steps (profiling); the harmonic stage then starts at the ramp's end time anyway.
+Default discretisation: 48 around, 0.08 m axially, 0.01 m in the contact zone, P2. One
+line per accepted step (wall time, GMRES iterations, factorisations) and, after each
+stage, the wall and CPU time per phase (pairing, contact update, residual, Jacobian
+assembly, factorisation, linear solves, bulk vectors, other; ``benchmarks/phase_timer.py``).
+``--max-steps N`` stops each stage after N steps (profiling; the harmonic stage then starts
+where the ramp stopped). ``--save-displacement`` writes the final displacement per rank
+(to compare two versions of the code). The installation demo's contact settings are
+``--theta -1 --gamma0 1 --max-gap-change 1e-5 --backtracks 4 --rho-inf 0 --lagged-friction``.
 """
 
 import argparse
@@ -46,6 +49,23 @@ from solver.newmark import GeneralisedAlpha  # noqa: E402
 from phase_timer import PhaseTimer  # noqa: E402
 
 
+class StepLog:
+    """Observer printing one line per accepted step (one per stage, after ``timer.reset``): wall time,
+    GMRES iterations and factorisations since the previous step (failed attempts included)."""
+
+    def __init__(self, timer: PhaseTimer, say):
+        self.timer, self.say = timer, say
+        self._last = (time.perf_counter(), 0, 0)
+
+    def __call__(self, problem) -> dict[str, float]:
+        now, gmres, factorisations = time.perf_counter(), self.timer.gmres, self.timer.calls["factorisation"]
+        t0, g0, f0 = self._last
+        self._last = (now, gmres, factorisations)
+        self.say(f"    t = {problem.t:.6f} s: {now - t0:6.2f} s wall, GMRES {gmres - g0}, "
+                 f"factorisations {factorisations - f0}", flush=True)
+        return {}
+
+
 def main(argv=None) -> int:
     p = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     p.add_argument("--case", default="scaled")
@@ -71,6 +91,7 @@ def main(argv=None) -> int:
     p.add_argument("--backtracks", type=int, default=4, help="Newton step halvings when ||F|| grows")
     p.add_argument("--refactor-after", type=int, default=25,
                    help="GMRES iterations before refactorising A + J_c (0: LU every Newton iteration)")
+    p.add_argument("--krylov-rtol", type=float, default=1e-11, help="GMRES tolerance of the Newton corrections")
     p.add_argument("--max-steps", type=int, default=0, help="stop each stage after this many steps (0: no limit)")
     p.add_argument("--quick", action="store_true", help="short stages (smoke run)")
     p.add_argument("--output", default="output/dynamics_joint")
@@ -99,7 +120,7 @@ def main(argv=None) -> int:
     problem = Elastodynamics(V, M, K, bcs, load=loading, scheme=GeneralisedAlpha.from_spectral_radius(a.rho_inf),
                              damping=RayleighDamping.at_frequency(a.zeta, a.zeta_frequency), contact=contact,
                              newton_options={"max_backtracks": a.backtracks, "refactor_after": a.refactor_after,
-                                             "max_gap_change": a.max_gap_change})
+                                             "max_gap_change": a.max_gap_change, "krylov_rtol": a.krylov_rtol})
     problem.initialise(0.0)
     settlement = Settlement(problem.u, joint, data.cell_tags)
     dofs = V.dofmap.index_map.size_global * 3
@@ -119,8 +140,8 @@ def main(argv=None) -> int:
     for name, t_end, dt in stages[: 2 if a.forcing > 0 else 1]:
         timer.reset()
         t0, cpu0 = time.perf_counter(), time.process_time()
-        rows = run(problem, t_end, dt, observers=[settlement], csv_path=out / f"{name}.csv",
-                   progress=comm.rank == 0 and not a.max_steps)
+        rows = run(problem, t_end, dt, observers=[settlement, StepLog(timer, say)], csv_path=out / f"{name}.csv",
+                   progress=False)
         wall, cpu = time.perf_counter() - t0, time.process_time() - cpu0
         its = np.array([r["newton_iterations"] for r in rows])
         say(f"{name}: {len(rows)} steps of {dt:.3g} s, {wall / len(rows):.3f} s/step, Newton iterations "
