@@ -22,6 +22,7 @@ from solver import backend  # noqa: F401,E402  (before dolfinx)
 
 from mpi4py import MPI  # noqa: E402
 
+from solver import demo_cli  # noqa: E402
 from solver.case import read_case  # noqa: E402
 from solver.installation import Installation, InstallationCase  # noqa: E402
 
@@ -45,26 +46,11 @@ QUICK = [
     "output.checkpoint_every=20",
 ]
 
-#: the default run (no options): a very coarse mesh (8 around, 0.25 m) with 10 mm elements
-#: axially in the contact zone (the contact band is about 20 x the settlement high), short
-#: stages and the contact settings with which the stages converge on the joint
-#: (docs/contact.md: skew-symmetric Nitsche with gamma0 = 1, gap-limited Newton steps,
-#: generalised-alpha with rho_inf = 0), so that it finishes in reasonable time on 2 cores;
-#: --full uses the case file as written
-DEFAULT = [
-    "mesh.n_circumferential=8",
-    "mesh.axial_size=0.25",
-    "mesh.contact_axial_size=0.01",
-    "contact.theta=-1",
-    "contact.gamma0=1.0",
-    "contact.max_gap_change=1e-5",
-    "contact.max_backtracks=4",
-    "time.rho_inf=0.0",
-    "self_weight.hold_s=0.0",
-    "vibration.stage_duration_s=0.03",
-    "time.steps_per_period=16",
-    "vibration.n_modes=20",
-]
+#: the default run (no options): the coarse frictional joint shared by the demos
+#: (solver.demo_cli.COARSE_FRICTIONAL: 8 around, 0.25 m, 10 mm axially in the contact zone,
+#: the contact settings that converge on it), 0.03 s vibration stages and 20 modes, so that
+#: it finishes in reasonable time on 2 cores; --full uses the case file as written
+DEFAULT = demo_cli.COARSE_FRICTIONAL + ["vibration.stage_duration_s=0.03", "vibration.n_modes=20"]
 
 #: named options -> case keys
 NAMED = {

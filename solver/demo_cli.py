@@ -19,11 +19,14 @@ from mpi4py import MPI
 from solver.case import read_case
 from solver.installation import Installation, InstallationCase
 
-#: the contact settings with which the frictional self-weight stage converges on the very
-#: coarse joint (docs/contact.md, docs/install.md: the default run of demos/install.py)
+#: the very coarse joint (8 around, 0.25 m) with 10 mm axial elements in the contact zone
+#: (the contact band is about 20 x the settlement high) and the contact settings with which
+#: the frictional stages converge on it (docs/contact.md, docs/install.md: the default run of
+#: demos/install.py)
 COARSE_FRICTIONAL = [
     "mesh.n_circumferential=8",
     "mesh.axial_size=0.25",
+    "mesh.contact_axial_size=0.01",
     "contact.theta=-1",
     "contact.gamma0=1.0",
     "contact.max_gap_change=1e-5",
@@ -40,6 +43,7 @@ COARSE_FRICTIONAL = [
 QUICK = [
     "mesh.n_circumferential=12",
     "mesh.axial_size=0.2",
+    "mesh.contact_axial_size=0.0",
     "contact.theta=-1",
     "contact.gamma0=1.0",
     "contact.max_gap_change=1e-5",
