@@ -24,6 +24,7 @@ before anything is computed. SI units; frequencies in Hz, forces in N.
 from __future__ import annotations
 
 import json
+import sys
 import math
 import time
 from collections.abc import Callable
@@ -848,7 +849,7 @@ class Installation:
     ):
         self.comm, self.case = comm, case
         self.output = Path(output)
-        self.log = log or (lambda s: print(s, flush=True) if comm.rank == 0 else None)
+        self.log = log or (_write_line if comm.rank == 0 else (lambda s: None))
         self.progress = progress and comm.rank == 0
         self.model: JointModel | None = None
         self.history: list[dict[str, float]] = []
@@ -1142,6 +1143,14 @@ class Installation:
             unit="s",
             bar_format="{l_bar}{bar}| {n:.4g}/{total:.4g} s simulated {postfix}",
         )
+
+
+def _write_line(text: str) -> None:
+    """Print a line of the run's log without breaking an active progress bar (rank 0)."""
+    from tqdm import tqdm
+
+    tqdm.write(text)
+    sys.stdout.flush()
 
 
 class _Stopped(Exception):
