@@ -670,6 +670,7 @@ class Excitation:
 
 
 PAIR_TOLERANCE = 0.02  #: relative frequency difference within which two modes are one pair
+MIN_FREQUENCY_HZ = 1.0  #: modes below this are not excited [Hz]
 
 
 def choose_frequencies(records: list[ModeRecord], settings: VibrationSettings) -> list[Excitation]:
@@ -685,7 +686,10 @@ def choose_frequencies(records: list[ModeRecord], settings: VibrationSettings) -
       frequency f: between f/2 and min(1.5 f, max_frequency_hz)).
     Stages are returned in increasing frequency after the lead-in.
     """
-    candidates = [r for r in records if r.frequency_Hz <= settings.max_frequency_hz]
+    # below MIN_FREQUENCY_HZ: rigid-body motions of a part the contact does not hold, not modes
+    candidates = [
+        r for r in records if MIN_FREQUENCY_HZ <= r.frequency_Hz <= settings.max_frequency_hz
+    ]
     chosen: list[Excitation] = []
 
     def same_pair(r: ModeRecord) -> bool:  # the partner of a degenerate pair (or a near-tie)

@@ -110,6 +110,11 @@ class InterfaceSampler:
 def resonant_slip(
     participation: float, rms_slip: float, f_hz: float, force_n: float, zeta: float
 ) -> float:
-    """Slip amplitude at resonance [m]: |phi^T f| F / (2 zeta omega^2) * slip_rms."""
+    """Slip amplitude at resonance [m]: |phi^T f| F / (2 zeta omega^2) * slip_rms.
+
+    A zero-frequency mode (a part not held, e.g. an imperfect TP resting on one point) has
+    unbounded resonant slip: inf."""
     omega2 = (2 * np.pi * f_hz) ** 2
+    if omega2 <= 0.0:
+        return np.inf
     return abs(participation) * force_n / (2 * zeta * omega2) * rms_slip

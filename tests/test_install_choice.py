@@ -4,6 +4,7 @@ import numpy as np
 import pytest
 
 from solver.installation import VibrationSettings, choose_frequencies
+from solver.mode_indicators import resonant_slip
 from solver.modal_report import ModeRecord
 
 pytestmark = pytest.mark.mpi
@@ -70,3 +71,14 @@ def test_pair_partner_is_not_a_second_frequency():
     assert [e.frequency_Hz for e in chosen if e.role == "modal"] == [138.27]
     control = next(e for e in chosen if e.role == "control")
     assert min(abs(control.frequency_Hz - r.frequency_Hz) for r in records) > 0.2 * 138.27
+
+
+def test_rigid_body_modes_are_not_excited():
+    """A TP the contact does not hold has ~0 Hz modes with unbounded resonant slip (rank 1):
+    they are not excitation frequencies."""
+    records = [_record(1, 0.0, 1, 0, 1), _record(2, 1e-3, 1, 0, 2), _record(3, 140.0, 1, 0, 3)]
+    chosen = choose_frequencies(
+        records, VibrationSettings(n_frequencies=1, lead_in_hz=(), max_frequency_hz=300.0)
+    )
+    assert [e.frequency_Hz for e in chosen if e.role == "modal"] == [140.0]
+    assert resonant_slip(0.1, 1e-3, 0.0, 3600.0, 0.01) == np.inf  # (was a ZeroDivisionError)
