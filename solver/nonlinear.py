@@ -11,9 +11,18 @@ LU factors of A + J_c at an earlier iterate as preconditioner. J_c only touches 
 interface dofs and changes mostly where contact states change, so GMRES often needs
 few iterations; when it fails within ``refactor_after`` iterations the current A + J_c
 is factorised, and when a solve's GMRES time exceeded the last factorisation's time
-the next correction refactorises (so the policy adapts to problem size and machine). The correction is still the exact Newton step (to the Krylov
-tolerance), so the generalized Newton convergence rate is kept. The workspace (and
-its factorisation) can be kept across steps while A is unchanged.
+the next correction refactorises (so the policy adapts to problem size and machine).
+
+The corrections are inexact Newton steps (Eisenstat and Walker 1996, choice 2): GMRES
+stops at ||F + (A + J_c) du|| <= eta_k ||F||, with eta_0 = 0.5 tol / ||F_0|| (tol: the
+Newton tolerance; a nearly linear step, e.g. a quiet vibration step, then converges in
+one iteration) and
+eta_k = 0.9 (||F_k|| / ||F_{k-1}||)^2, safeguarded by 0.9 eta_{k-1}^2 when that exceeds
+0.1, capped at ``forcing_max``, and never tighter than needed to reach the Newton
+tolerance (0.5 tol / ||F_k||) nor than ``krylov_rtol``. Far from the solution a few GMRES
+iterations suffice; near it eta_k = O(||F_k||) keeps the rate quadratic. With
+``forcing_max = 0`` every correction is solved to ``krylov_rtol`` (exact Newton). The
+workspace (and its factorisation) can be kept across steps while A is unchanged.
 """
 
 import time
@@ -72,9 +81,16 @@ class ContactNewtonSolver:
         stol: ... or when the Newton correction ||du||_inf <= stol ||u||_inf (the residual of a
             C0 faceted master surface can stagnate at the level lambda x kink angle).
         max_iterations: Newton iteration limit.
+        stall_iterations: give up (converged=False) when the smallest ||F|| so far is this many
+            iterations old: a generalized Newton that cycles between contact states (e.g. from a
+            predictor that slides on where the TP stops) does not recover, and the caller's
+            fallback (restart from u_n, step cut) is cheaper than the remaining iterations.
+            0: no limit.
         refactor_after: refactorise when GMRES needs more iterations than this; 0 factorises
             A + J_c at every Newton iteration (plain Newton with direct solves).
-        krylov_rtol: relative tolerance of the GMRES correction solve.
+        krylov_rtol: tightest relative tolerance of the GMRES correction solves.
+        forcing_max: largest GMRES relative tolerance (Eisenstat-Walker forcing term, see the
+            module docstring); 0: every correction to krylov_rtol.
         lu_solver: PETSc factorisation package ("mumps", "superlu_dist", "petsc").
         max_backtracks: step halvings when a Newton step increases ||F|| (0: plain Newton).
         max_gap_change: if given [m], damp each Newton step so that no slave point's gap decreases
@@ -93,8 +109,10 @@ class ContactNewtonSolver:
         atol: float = 1e-12,
         stol: float = 1e-10,
         max_iterations: int = 30,
+        stall_iterations: int = 8,
         refactor_after: int = 25,
         krylov_rtol: float = 1e-11,
+        forcing_max: float = 1e-3,
         lu_solver: str = "mumps",
         max_backtracks: int = 0,
         max_gap_change: float | None = None,
@@ -105,9 +123,15 @@ class ContactNewtonSolver:
             raise ValueError(f"refactor_after must be >= 0, got {refactor_after}")
         if not (rtol > 0 and atol >= 0 and stol >= 0 and krylov_rtol > 0):
             raise ValueError("tolerances must be positive (atol, stol >= 0)")
+        if not 0 <= forcing_max < 1:
+            raise ValueError(f"forcing_max must lie in [0, 1), got {forcing_max}")
+        self.krylov_rtol, self.forcing_max = krylov_rtol, forcing_max
         self.A = A
         self.rtol, self.atol, self.stol = rtol, atol, stol
         self.max_iterations = max_iterations
+        if stall_iterations < 0:
+            raise ValueError(f"stall_iterations must be >= 0, got {stall_iterations}")
+        self.stall_iterations = stall_iterations
         self.refactor_after = refactor_after
         self.max_backtracks = max_backtracks
         if max_gap_change is not None and not max_gap_change > 0:
@@ -164,8 +188,22 @@ class ContactNewtonSolver:
         self.factorizations += 1
         self._factor_time = time.perf_counter() - t0
 
-    def _correction(self, J: PETSc.Mat, F: PETSc.Vec, du: PETSc.Vec, timings: dict) -> int:
-        """Solve (A + J) du = -F; returns GMRES iterations (refactorising when needed).
+    def _forcing(self, norms: list[float], eta_old: float, tol: float) -> float:
+        """GMRES relative tolerance of the next correction (Eisenstat-Walker choice 2, safeguarded)."""
+        if self.forcing_max == 0.0:
+            return self.krylov_rtol
+        if len(norms) == 1:  # aim at the Newton tolerance, as for a linear problem (quiet steps: one iteration)
+            eta = 0.5 * tol / norms[0]
+        else:
+            eta = 0.9 * (norms[-1] / norms[-2]) ** 2
+            if 0.9 * eta_old**2 > 0.1:
+                eta = max(eta, 0.9 * eta_old**2)
+        eta = min(eta, self.forcing_max)
+        return max(eta, 0.5 * tol / norms[-1], self.krylov_rtol)
+
+    def _correction(self, J: PETSc.Mat, F: PETSc.Vec, du: PETSc.Vec, timings: dict, eta: float) -> int:
+        """Solve (A + J) du = -F to GMRES relative tolerance eta; returns GMRES iterations
+        (refactorising when needed).
 
         The factors are reused while that is cheaper: after a solve whose GMRES iterations
         cost more time than the last factorisation, the next correction refactorises.
@@ -175,6 +213,7 @@ class ContactNewtonSolver:
         rhs = F.copy()
         rhs.scale(-1.0)
         fresh = self._P is None or self.refactor_after == 0 or self._refactor_next
+        self.ksp.setTolerances(rtol=eta)
         t0 = time.perf_counter()
         if fresh:
             self._factorise(J, op)
@@ -276,24 +315,32 @@ class ContactNewtonSolver:
         factorizations0 = self.factorizations
         result = None
         step_small = False
+        eta = self.forcing_max
         norm = self._residual(b, contact, u, F, timings)
         for k in range(self.max_iterations + 1):
             norms.append(norm)
             if not np.isfinite(norm):
                 result = NewtonResult(False, k, norms, linear, message=f"residual is not finite at iteration {k}")
                 break
-            if norm <= max(self.atol, self.rtol * max(norms[0], b_norm), _residual_floor(contact)) or step_small:
+            tol = max(self.atol, self.rtol * max(norms[0], b_norm), _residual_floor(contact))
+            if norm <= tol or step_small:
                 result = NewtonResult(True, k, norms, linear)
                 break
             if k == self.max_iterations:
                 result = NewtonResult(False, k, norms, linear, message=f"no convergence in {k} Newton iterations (||F|| = {norm:.3e} N)")
+                break
+            best = int(np.argmin(norms))
+            if self.stall_iterations and k - best >= self.stall_iterations:
+                result = NewtonResult(False, k, norms, linear, message=f"||F|| not decreasing: smallest {norms[best]:.3e} N at "
+                                      f"iteration {best}, now {norm:.3e} N at iteration {k}")
                 break
             t0 = time.perf_counter()
             J = contact.jacobian()
             J.zeroRows(self._bc_rows, diag=0.0)
             timings["contact assembly"] += time.perf_counter() - t0
             try:
-                linear.append(self._correction(J, F, du, timings))
+                eta = self._forcing(norms, eta, tol)
+                linear.append(self._correction(J, F, du, timings, eta))
             except (PETSc.Error, RuntimeError) as err:
                 result = NewtonResult(False, k, norms, linear, message=f"linear solve failed at Newton iteration {k}: {err}")
                 break
