@@ -34,10 +34,14 @@ off-resonance threshold (the joint holds it: branch (b) settles almost nothing) 
 Measured (serial, 3 passed): lead-in +0.897 mm; (a) +0.0467 mm, (b) +0.0022 mm (ratio 20.8),
 (c) +0.248 mm.
 
-Cost: about 440 time steps (the 0.05 s branch at f_r alone 114), well above the suite's
-5 min per file serially; the durations cannot be cut further without breaking the physics
-above.
+Cost: about 440 time steps (100 static, 112 + 114 + 57 + 57 at 16 per period): 27 min 19 s
+serial (CPU 11 min 24 s) with four other heavy processes on the 2 cores, far above the
+suite's 5 min per file; the durations cannot be cut further without breaking the physics
+above. So the tests run only with SLIPJOINT_LONG_TESTS=1 (as the sweep test of
+tests/test_install_dismount.py).
 """
+
+import os
 
 import numpy as np
 import pytest
@@ -47,7 +51,14 @@ from benchmarks.scenarios import gain, harmonic_stage, late_gain, settle, stabil
 from solver import checkpoint
 from solver.demo_cli import COARSE_FRICTIONAL
 
-pytestmark = pytest.mark.mpi
+pytestmark = [
+    pytest.mark.mpi,
+    pytest.mark.skipif(
+        os.environ.get("SLIPJOINT_LONG_TESTS") != "1",
+        reason="about 440 time steps, 27 min serial on the loaded machine, far above the suite's "
+        "budget (module docstring, docs/install.md); runs with SLIPJOINT_LONG_TESTS=1",
+    ),
+]
 
 SCENARIO = COARSE_FRICTIONAL + ["self_weight.ramp_time_s=1.0", "self_weight.dt_s=0.01"]
 AMPLITUDE = 3600.0  #: force amplitude A [N] (SPEC 3: the eccentric motors at 100 Hz)
