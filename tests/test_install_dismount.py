@@ -34,9 +34,14 @@ f_r is the best-ranked natural frequency of the settled joint below the case's 3
   to settle less. Measured (serial and 2 ranks): dwell +0.065 mm, ramp +0.072 mm (ratio 1.12):
   about 9-10 um per excitation cycle in both, i.e. the TP ratchets down by a similar amount each
   cycle at any frequency of this band instead of building up a resonance (the 8-around P2 mesh
-  locks, so its 142 Hz pair is not a physical mode, docs/install.md "Known problems"). The test
-  asserts only that both branches settle beyond the static peak-force settlement.
+  locks, so its 142 Hz pair is not a physical mode, docs/install.md "Known problems"). The
+  sweep tests take about 6 min serially and twice that on 2 ranks, so they run only when the
+  environment sets SLIPJOINT_LONG_TESTS=1; they then assert what holds: both branches settle
+  beyond the static peak-force settlement (SPEC 5.7 itself is not asserted: it fails here).
 """
+
+import os
+
 
 import numpy as np
 import pytest
@@ -170,6 +175,13 @@ def test_pull_alone_holds_pull_plus_vibration_at_f_r_separates(settled):
     assert separated(vibrated)
 
 
+LONG = pytest.mark.skipif(
+    os.environ.get("SLIPJOINT_LONG_TESTS") != "1",
+    reason="SPEC 5.7 (fast sweep settles less) is not reproduced on the coarse joint (dwell +0.065 mm, "
+    "ramp +0.072 mm; module docstring); the 6-min measurement runs with SLIPJOINT_LONG_TESTS=1",
+)
+
+
 @pytest.fixture(scope="module")
 def sweep(settled):
     """Settlement gained [mm] by the dwell at f_r and by the ramp across it, after the static
@@ -198,6 +210,7 @@ def sweep(settled):
     return gains
 
 
+@LONG
 def test_vibration_settles_beyond_the_static_peak_force(sweep):
     """Both branches settle further than the static preload to the peak force did: settlement
     under vibration is not only the quasi-static share (SPEC 5.7 itself: module docstring)."""
