@@ -31,11 +31,12 @@ off-resonance threshold (the joint holds it: branch (b) settles almost nothing) 
   force enough to stop the resonant interface slip; neither happens within 0.14 mm. So (a)'s
   share is printed, not asserted.
 
-Measured (serial, 3 passed): lead-in +0.897 mm; (a) +0.0467 mm, (b) +0.0022 mm (ratio 20.8),
+Measured (serial and 2 ranks alike, 3 passed): lead-in +0.897 mm; (a) +0.0467 mm, (b) +0.0022 mm (ratio 20.8),
 (c) +0.248 mm.
 
 Cost: about 440 time steps (100 static, 112 + 114 + 57 + 57 at 16 per period): 27 min 19 s
-serial (CPU 11 min 24 s) with four other heavy processes on the 2 cores, far above the
+serial (CPU 11 min 24 s), 20 min 49 s on 2 ranks, with four other heavy processes on the
+2 cores, far above the
 suite's 5 min per file; the durations cannot be cut further without breaking the physics
 above. So the tests run only with SLIPJOINT_LONG_TESTS=1 (as the sweep test of
 tests/test_install_dismount.py).
