@@ -20,8 +20,9 @@ a 2 s ramp).
   contact set, solver.installation.settled_modes) rise with settlement: the lowest modes at
   the end of the ramp lie above those at half the load.
 
-The vibration scenarios (SPEC 5.2, 5.3, 5.5, 5.7) are in benchmarks/scenarios.py (too long for
-the test suite on 2 cores; docs/install.md reports their measured outcome).
+The vibration scenarios are tests/test_install_vibration.py (SPEC 5.2, 5.3; opt-in with
+SLIPJOINT_LONG_TESTS=1, too long for the suite) and tests/test_install_dismount.py (SPEC 5.5;
+5.7 opt-in); docs/install.md reports their measured outcome.
 """
 
 import numpy as np
