@@ -10,8 +10,9 @@ Linear solves reuse one LU factorisation: each Newton correction solves
 LU factors of A + J_c at an earlier iterate as preconditioner. J_c only touches the
 interface dofs and changes mostly where contact states change, so GMRES often needs
 few iterations; when it fails within ``refactor_after`` iterations the current A + J_c
-is factorised, and when a solve's GMRES time exceeded the last factorisation's time
-the next correction refactorises (so the policy adapts to problem size and machine).
+is factorised, and after a solve that needed more than ``refactor_after // 2`` GMRES
+iterations the next correction refactorises. The policy uses iteration counts, not
+timings, so a run's results do not depend on the machine's load.
 
 The corrections are inexact Newton steps (Eisenstat and Walker 1996, choice 2): GMRES
 stops at ||F + (A + J_c) du|| <= eta_k ||F||, with eta_0 = 0.5 tol / ||F_0|| (tol: the
@@ -86,8 +87,9 @@ class ContactNewtonSolver:
             predictor that slides on where the TP stops) does not recover, and the caller's
             fallback (restart from u_n, step cut) is cheaper than the remaining iterations.
             0: no limit.
-        refactor_after: refactorise when GMRES needs more iterations than this; 0 factorises
-            A + J_c at every Newton iteration (plain Newton with direct solves).
+        refactor_after: refactorise when GMRES needs more iterations than this (and for the
+            next correction after more than half of them); 0 factorises A + J_c at every
+            Newton iteration (plain Newton with direct solves).
         krylov_rtol: tightest relative tolerance of the GMRES correction solves.
         forcing_max: largest GMRES relative tolerance (Eisenstat-Walker forcing term, see the
             module docstring); 0: every correction to krylov_rtol.
@@ -160,7 +162,6 @@ class ContactNewtonSolver:
         pc.setFactorSolverType(lu_solver)
         self._P: PETSc.Mat | None = None
         self._P_pattern = None  # coo_pattern tag of the J in _P
-        self._factor_time = 0.0
         self._refactor_next = False
         self.factorizations = 0
 
@@ -168,7 +169,6 @@ class ContactNewtonSolver:
         """Factorise A + J. When J carries the same ``coo_pattern`` tag as the J of the factorised
         matrix (``NitscheContact`` tags its Jacobians), A + J has the same sparsity: the matrix
         is refilled in place and only the numeric factorisation is redone (no new ordering)."""
-        t0 = time.perf_counter()
         pattern = J.getAttr("coo_pattern")
         same = self._P is not None and pattern is not None and pattern == self._P_pattern
         if self._comm.allreduce(same, op=MPI.LAND):  # collective: both branches are
@@ -186,7 +186,6 @@ class ContactNewtonSolver:
         self.ksp.setUp()
         self.ksp.getPC().setReusePreconditioner(True)
         self.factorizations += 1
-        self._factor_time = time.perf_counter() - t0
 
     def _forcing(self, norms: list[float], eta_old: float, tol: float) -> float:
         """GMRES relative tolerance of the next correction (Eisenstat-Walker choice 2, safeguarded)."""
@@ -205,8 +204,8 @@ class ContactNewtonSolver:
         """Solve (A + J) du = -F to GMRES relative tolerance eta; returns GMRES iterations
         (refactorising when needed).
 
-        The factors are reused while that is cheaper: after a solve whose GMRES iterations
-        cost more time than the last factorisation, the next correction refactorises.
+        The factors are reused until a solve needs more than ``refactor_after // 2`` GMRES
+        iterations; the next correction then refactorises.
         """
         op = PETSc.Mat().createPython(self.A.getSizes(), _SumOperator(self.A, J), comm=self.A.getComm())
         op.setUp()
@@ -230,11 +229,11 @@ class ContactNewtonSolver:
             self.ksp.solve(rhs, du)
             its += self.ksp.getIterationNumber()
             fresh = True
-        elapsed = time.perf_counter() - t0
-        timings["linear solve"] += elapsed
-        # a collective decision: ranks that disagreed would deadlock in the factorisation
-        slow = not fresh and elapsed > self._factor_time
-        self._refactor_next = self._comm.allreduce(slow, op=MPI.LOR)
+        timings["linear solve"] += time.perf_counter() - t0
+        # iteration counts, not timings, decide: the same on every rank (ranks that disagreed
+        # would deadlock in the factorisation) and in every run, so that the reused factors,
+        # and hence the results, do not depend on the machine's load
+        self._refactor_next = not fresh and its > self.refactor_after // 2
         reason = self.ksp.getConvergedReason()
         op.destroy()
         rhs.destroy()
