@@ -73,6 +73,10 @@ def main(argv=None) -> int:
     p.add_argument("--axial-size", type=float, default=0.08, help="[m]")
     p.add_argument("--contact-axial-size", type=float, default=0.01, help="axial size in the contact zone [m]")
     p.add_argument("--degree", type=int, default=2)
+    p.add_argument("--partition", choices=("sectors", "graph"), default="sectors",
+                   help="parallel distribution of the cells (geometry.parameters.MeshOptions)")
+    p.add_argument("--newton-rtol", type=float, default=None,
+                   help="relative Newton tolerance (default: solver.nonlinear's)")
     p.add_argument("--mu", type=float, nargs=2, default=(0.5, 0.4), metavar=("MU_S", "MU_D"))
     p.add_argument("--d-c", type=float, default=100.0, help="friction decay [s/m]")
     p.add_argument("--gamma0", type=float, default=10.0)
@@ -107,7 +111,7 @@ def main(argv=None) -> int:
 
     joint, material, _ = load_geometry(resolve_case_path(a.case))
     options = MeshOptions(n_circumferential=a.n_circumferential, axial_size=a.axial_size,
-                          contact_axial_size=a.contact_axial_size)
+                          contact_axial_size=a.contact_axial_size, partition=a.partition)
     t0 = time.perf_counter()
     data = create_joint_mesh(comm, joint, options)
     V = fem.functionspace(data.mesh, ("Lagrange", a.degree, (3,)))
@@ -124,16 +128,19 @@ def main(argv=None) -> int:
                              damping=RayleighDamping.at_frequency(a.zeta, a.zeta_frequency), contact=contact,
                              newton_options={"max_backtracks": a.backtracks, "refactor_after": a.refactor_after,
                                              "max_gap_change": a.max_gap_change, "krylov_rtol": a.krylov_rtol}
-                             | ({} if a.forcing_max is None else {"forcing_max": a.forcing_max}))
+                             | ({} if a.forcing_max is None else {"forcing_max": a.forcing_max})
+                             | ({} if a.newton_rtol is None else {"rtol": a.newton_rtol}))
     problem.initialise(0.0)
     settlement = Settlement(problem.u, joint, data.cell_tags)
     dofs = V.dofmap.index_map.size_global * 3
-    points = comm.allreduce(contact.slave.num_points, op=MPI.SUM)
+    per_rank = comm.allgather(contact.slave.num_points)
+    points = sum(per_rank)
     setup = time.perf_counter() - t0
     say = print if comm.rank == 0 else (lambda *args, **kw: None)
     say(f"joint: {dofs} dofs, degree {a.degree}, {a.n_circumferential} around, {a.axial_size} m axial "
         f"({a.contact_axial_size} m in the contact zone), {points} slave points, "
-        f"{contact.master.num_facets} master facets, {comm.size} rank(s); set-up {setup:.1f} s")
+        f"{contact.master.num_facets} master facets, {comm.size} rank(s) ({a.partition} partition, slave "
+        f"points per rank {per_rank}); set-up {setup:.1f} s")
 
     out = pathlib.Path(a.output)
     stages = [("self-weight", ramp_end, a.dt_ramp),
