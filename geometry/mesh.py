@@ -233,10 +233,36 @@ def build_tube_model(part: ConePart, options: MeshOptions) -> None:
     _generate(options)
 
 
-def _to_dolfinx(comm: MPI.Comm, build: Callable[[], None], name: str) -> dolfinx.io.gmsh.MeshData:
-    """Run ``build`` on rank 0 in a fresh gmsh model and distribute the mesh."""
+def sector_partitioner(x: np.ndarray | None) -> Callable:
+    """DOLFINx cell partitioner: cell -> rank by equal angular sectors about the z axis.
+
+    ``x`` (num_nodes, 3) [m] are the input node coordinates on the rank that holds the
+    cells (None elsewhere); the partitioner receives each cell's vertices as indices into
+    ``x``. Every rank gets a sector of both parts, so the contact surfaces (and their
+    quadrature work) are shared, and the cuts are two planes through the axis per rank.
+    Cells are not ghosted (as DOLFINx's default partitioner with GhostMode.none).
+    """
+
+    def partition(comm: MPI.Comm, n_parts: int, cell_types, topology):
+        vertices = [np.asarray(t).reshape(-1, dolfinx.cpp.mesh.cell_num_vertices(c))
+                    for c, t in zip(cell_types, topology)]
+        destination = []
+        for v in vertices:
+            centre = x[v].mean(axis=1) if len(v) else np.zeros((0, 3))
+            angle = np.arctan2(centre[:, 1], centre[:, 0]) + np.pi  # [0, 2 pi]
+            destination.append(np.minimum((angle * n_parts / (2 * np.pi)).astype(np.int32), n_parts - 1))
+        return dolfinx.graph.adjacencylist(np.concatenate(destination).reshape(-1, 1))._cpp_object
+
+    return partition
+
+
+def _to_dolfinx(comm: MPI.Comm, build: Callable[[], None], name: str,
+                partition: str = "sectors") -> dolfinx.io.gmsh.MeshData:
+    """Run ``build`` on rank 0 in a fresh gmsh model and distribute the mesh
+    (``partition``: :class:`MeshOptions` ``partition``)."""
     rank = 0
     started = False
+    x = None
     if comm.rank == rank:
         if not gmsh.isInitialized():
             gmsh.initialize()
@@ -250,7 +276,10 @@ def _to_dolfinx(comm: MPI.Comm, build: Callable[[], None], name: str) -> dolfinx
             if started:
                 gmsh.finalize()
             raise
-    mesh_data = dolfinx.io.gmsh.model_to_mesh(gmsh.model, comm, rank, gdim=3)
+        if partition == "sectors":
+            x = dolfinx.io.gmsh.extract_geometry(gmsh.model)
+    partitioner = sector_partitioner(x) if partition == "sectors" and comm.size > 1 else None
+    mesh_data = dolfinx.io.gmsh.model_to_mesh(gmsh.model, comm, rank, gdim=3, partitioner=partitioner)
     if comm.rank == rank:
         gmsh.model.remove()
         if started:
@@ -269,7 +298,7 @@ def create_joint_mesh(
     :func:`geometry.contact_map.tp_placement` (``joint.tp_offset`` for perfect parts)."""
     tp_z = tp_placement(joint, imperfections)  # on every rank: errors before gmsh starts
     return _to_dolfinx(
-        comm, lambda: build_joint_model(joint, options, imperfections, tp_z), "slipjoint"
+        comm, lambda: build_joint_model(joint, options, imperfections, tp_z), "slipjoint", options.partition
     )
 
 
@@ -277,7 +306,7 @@ def create_tube_mesh(
     comm: MPI.Comm, part: ConePart, options: MeshOptions
 ) -> dolfinx.io.gmsh.MeshData:
     """DOLFINx mesh of one part alone (lower end at z = 0), tags as in :mod:`geometry.tags`."""
-    return _to_dolfinx(comm, lambda: build_tube_model(part, options), "tube")
+    return _to_dolfinx(comm, lambda: build_tube_model(part, options), "tube", options.partition)
 
 
 def write_paraview(mesh_data: dolfinx.io.gmsh.MeshData, path: str | Path) -> Path:

@@ -292,6 +292,10 @@ class MeshOptions:
     contact_axial_size: float = 0.0  #: axial element size in the contact zone [m]; 0: axial_size
     contact_zone_below: float = 0.03  #: contact zone below the TP's lower edge (on the MP) [m]
     contact_zone_above: float = 0.15  #: contact zone above the TP's lower edge [m]
+    #: parallel distribution: "sectors" (equal angular sectors about the axis, each rank gets
+    #: a sector of both parts, so the contact work is shared) or "graph" (DOLFINx's default
+    #: graph partitioner, which tends to give a whole part to one rank)
+    partition: str = "sectors"
 
     def __post_init__(self) -> None:
         n = self.n_circumferential
@@ -307,6 +311,8 @@ class MeshOptions:
             raise ValueError(f"geometry_order must be 1 or 2, got {self.geometry_order!r}")
         if not self.contact_axial_size >= 0:
             raise ValueError(f"contact_axial_size must be >= 0 m, got {self.contact_axial_size}")
+        if self.partition not in ("sectors", "graph"):
+            raise ValueError(f"partition must be 'sectors' or 'graph', got {self.partition!r}")
         if not (self.contact_zone_below >= 0 and self.contact_zone_above > 0):
             raise ValueError(
                 "contact zone must have contact_zone_below >= 0 and contact_zone_above > 0 m, "

@@ -299,3 +299,39 @@ def test_contact_zone_options_are_checked():
         MeshOptions(contact_axial_size=-0.01)
     with pytest.raises(ValueError, match="contact zone"):
         MeshOptions(contact_axial_size=0.01, contact_zone_above=0.0)
+
+
+@pytest.mark.parametrize("partition", ["sectors", "graph"])
+def test_partition(scaled, partition):
+    """Both partitions give the same mesh (cell and contact facet counts, volumes). With
+    "sectors", each rank owns the cells of its angular sector (centres within
+    [2 pi r / p - pi, 2 pi (r + 1) / p - pi]), so every rank holds a share of both contact
+    surfaces of 1/p of the whole (+-1 layer of elements); serially nothing changes."""
+    options = MeshOptions(n_circumferential=8, axial_size=0.25, contact_axial_size=0.02, partition=partition)
+    md = create_joint_mesh(COMM, scaled, options)
+    expected = structured_counts(scaled, MeshOptions(n_circumferential=8, axial_size=0.25))
+    assert owned_count(md, 3, tags.TP_VOLUME) + owned_count(md, 3, tags.MP_VOLUME) > 0
+    reference = create_joint_mesh(COMM, scaled, MeshOptions(n_circumferential=8, axial_size=0.25,
+                                                            contact_axial_size=0.02, partition="graph"))
+    for dim, tag in ((3, tags.TP_VOLUME), (3, tags.MP_VOLUME), (2, tags.TP_CONTACT), (2, tags.MP_CONTACT)):
+        assert owned_count(md, dim, tag) == owned_count(reference, dim, tag)
+    assert integrate(md, "dx", tags.TP_VOLUME) == pytest.approx(integrate(reference, "dx", tags.TP_VOLUME), rel=1e-12)
+    assert owned_count(md, 2, tags.MP_CLAMPED) == expected[tags.MP_CLAMPED]
+    if partition != "sectors":
+        return
+    mesh = md.mesh
+    n_owned = mesh.topology.index_map(3).size_local
+    centres = dolfinx.mesh.compute_midpoints(mesh, 3, np.arange(n_owned, dtype=np.int32))
+    angle = np.arctan2(centres[:, 1], centres[:, 0]) + np.pi
+    sector = 2 * np.pi / COMM.size
+    assert np.all((angle >= COMM.rank * sector - 1e-9) & (angle <= (COMM.rank + 1) * sector + 1e-9))
+    for dim, tag in ((2, tags.TP_CONTACT), (2, tags.MP_CONTACT)):
+        meshtags = md.facet_tags
+        mine = int(np.sum(meshtags.find(tag) < mesh.topology.index_map(dim).size_local))
+        total = COMM.allreduce(mine)
+        assert abs(mine - total / COMM.size) <= total / options.n_circumferential
+
+
+def test_partition_option_is_checked():
+    with pytest.raises(ValueError, match="partition"):
+        MeshOptions(partition="metis")
