@@ -208,6 +208,7 @@ class MasterSurface:
         nrm = np.cross(t[:, :, 0], t[:, :, 1])
         nrm /= np.linalg.norm(nrm, axis=1)[:, None]
         self.frames = np.stack([t1, np.cross(nrm, t1), nrm], axis=1)  #: facet frames (nF, 3, 3), rows unit vectors
+        self._reference_boxes = self._box(self.facet_coords, np.arange(self.num_facets), *el.coord_box)
 
     @property
     def num_facets(self) -> int:
@@ -245,20 +246,20 @@ class MasterSurface:
         (|sum_j N_j e_j| <= Lambda max |e_j|, Lambda the Lebesgue constant of the facet
         element): the facet lies in that oriented box, and the distance to the box is the bound.
         """
-        el = self.elements
-        frame = self.frames[facet]  # (n, 3, 3), rows: unit vectors
-
-        def box(nodal, element, vertices, linear, lebesgue):
-            local = frame @ nodal[facet].transpose(0, 2, 1)  # (n, 3, nodes)
-            corners = local[:, :, vertices]
-            bulge = lebesgue * np.abs(local - corners @ linear.T).max(axis=2)
-            return corners.max(axis=2) + bulge, corners.min(axis=2) - bulge
-
-        hi_X, lo_X = box(self.facet_coords, *el.coord_box)
-        hi_d, lo_d = box(facet_disp, *el.box)
-        local = (frame @ x[:, :, None])[:, :, 0]
+        used, row = np.unique(facet, return_inverse=True)  # boxes once per facet, not per point
+        hi_X, lo_X = (b[used][row] for b in self._reference_boxes)
+        hi_d, lo_d = (b[row] for b in self._box(facet_disp, used, *self.elements.box))
+        local = (self.frames[facet] @ x[:, :, None])[:, :, 0]
         excess = np.maximum(np.maximum(local - hi_X - hi_d, lo_X + lo_d - local), 0.0)
         return (1 - 1e-9) * np.linalg.norm(excess, axis=1)
+
+    def _box(self, nodal: npt.NDArray, facet: npt.NDArray, element, vertices, linear, lebesgue):
+        """Upper and lower bounds (n, 3) of the facets' nodal fields ``nodal`` (nF, nodes, 3) along
+        the rows of their frames (``distance_bound``)."""
+        local = self.frames[facet] @ nodal[facet].transpose(0, 2, 1)  # (n, 3, nodes)
+        corners = local[:, :, vertices]
+        bulge = lebesgue * np.abs(local - corners @ linear.T).max(axis=2)
+        return corners.max(axis=2) + bulge, corners.min(axis=2) - bulge
 
     def centroids(self, disp: npt.NDArray) -> npt.NDArray:
         """Approximate deformed facet centres (mean of closure nodes) [m]."""
