@@ -257,9 +257,12 @@ def sector_partitioner(x: np.ndarray | None) -> Callable:
 
 
 def _to_dolfinx(comm: MPI.Comm, build: Callable[[], None], name: str,
-                partition: str = "sectors") -> dolfinx.io.gmsh.MeshData:
-    """Run ``build`` on rank 0 in a fresh gmsh model and distribute the mesh
-    (``partition``: :class:`MeshOptions` ``partition``)."""
+                options: MeshOptions) -> dolfinx.io.gmsh.MeshData:
+    """Run ``build`` on rank 0 in a fresh gmsh model and distribute the mesh (``options.partition``)."""
+    partition = options.partition
+    if partition == "sectors" and comm.size > options.n_circumferential // 2:
+        raise ValueError(f"{comm.size} ranks for {options.n_circumferential} elements around: sectors would be "
+                         "less than 2 elements wide; use [mesh] partition = \"graph\"")
     rank = 0
     started = False
     x = None
@@ -298,7 +301,7 @@ def create_joint_mesh(
     :func:`geometry.contact_map.tp_placement` (``joint.tp_offset`` for perfect parts)."""
     tp_z = tp_placement(joint, imperfections)  # on every rank: errors before gmsh starts
     return _to_dolfinx(
-        comm, lambda: build_joint_model(joint, options, imperfections, tp_z), "slipjoint", options.partition
+        comm, lambda: build_joint_model(joint, options, imperfections, tp_z), "slipjoint", options
     )
 
 
@@ -306,7 +309,7 @@ def create_tube_mesh(
     comm: MPI.Comm, part: ConePart, options: MeshOptions
 ) -> dolfinx.io.gmsh.MeshData:
     """DOLFINx mesh of one part alone (lower end at z = 0), tags as in :mod:`geometry.tags`."""
-    return _to_dolfinx(comm, lambda: build_tube_model(part, options), "tube", options.partition)
+    return _to_dolfinx(comm, lambda: build_tube_model(part, options), "tube", options)
 
 
 def write_paraview(mesh_data: dolfinx.io.gmsh.MeshData, path: str | Path) -> Path:
