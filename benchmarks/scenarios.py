@@ -31,6 +31,7 @@ import csv
 import pathlib
 import sys
 import time
+from collections.abc import Sequence
 from dataclasses import dataclass
 
 sys.path.insert(0, str(pathlib.Path(__file__).resolve().parent.parent))
@@ -42,7 +43,7 @@ from mpi4py import MPI  # noqa: E402
 
 from solver import checkpoint  # noqa: E402
 from solver.case import read_case  # noqa: E402
-from solver.dynamics import run  # noqa: E402
+from solver.dynamics import Observer, run  # noqa: E402
 from solver.installation import (  # noqa: E402
     InstallationCase,
     JointModel,
@@ -87,11 +88,12 @@ def settle(comm: MPI.Comm, overrides: list[str], case_name: str = "scaled") -> S
 
 
 def harmonic_stage(
-    model: JointModel, frequency: float, amplitude: float, duration: float
+    model: JointModel, frequency: float, amplitude: float, duration: float,
+    observers: Sequence[Observer] = (),
 ) -> np.ndarray:
     """Run one harmonic stage (``frequency`` [Hz], ``amplitude`` [N], ``duration`` [s]) from
-    the current state, ``time.steps_per_period`` steps per period; (time [s], settlement [mm])
-    rows from the stage start."""
+    the current state, ``time.steps_per_period`` steps per period, calling ``observers`` too
+    after each step; (time [s], settlement [mm]) rows from the stage start."""
     problem = model.problem
     t0 = problem.t
     attach_vibration(model, Schedule([Stage(duration, frequency, amplitude)], start_s=t0))
@@ -103,7 +105,8 @@ def harmonic_stage(
 
     dt = 1.0 / (frequency * model.case.time.steps_per_period)
     n_steps = max(1, round(duration / dt))
-    run(problem, t0 + duration, duration / n_steps, observers=[observe], progress=False)
+    run(problem, t0 + duration, duration / n_steps, observers=[observe, *observers],
+        progress=False)
     return np.array(rows)
 
 
