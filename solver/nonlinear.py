@@ -113,7 +113,7 @@ class ContactNewtonSolver:
         atol: float = 1e-12,
         stol: float = 1e-10,
         max_iterations: int = 30,
-        stall_iterations: int = 8,
+        stall_iterations: int = 4,
         refactor_after: int = 25,
         krylov_rtol: float = 1e-11,
         forcing_max: float = 1e-3,
