@@ -206,6 +206,9 @@ class NitscheContact:
         new_m = np.einsum("pn,pni->pi", p.master_values, disp[facet])
         rel = (u_s - self._u_old_slave) - (new_m - old_m)
         ds = rel - np.einsum("pi,pi->p", rel, n)[:, None] * n
+        # round-off level of ds [m]: below it the slip direction ds/|ds| is noise
+        magnitude = sum(np.linalg.norm(a, axis=1) for a in (u_s, self._u_old_slave, new_m, old_m))
+        self._ds_roundoff = 256 * np.finfo(float).eps * magnitude
         gamma = self.gamma
         P_n = sigma_n + gamma * p.gap
         P_t = sigma_t - gamma[:, None] * ds
@@ -332,9 +335,13 @@ class NitscheContact:
             d = (mu * p / norm)[:, None, None] * (Bt[s] - q[:, :, None] * np.einsum("pi,pik->pk", q, Bt[s])[:, None, :])
             d_radius = -mu[:, None] * Bn[s]
             if self.dt is not None and not self.lagged_friction:
+                # d|v| = e . d(ds) / dt with e = ds/|ds|; |ds| has no derivative at 0, where any unit
+                # vector is a generalized gradient: take the slip direction of the trial traction,
+                # -q, while ds is at round-off (the first iterate of a step), not a direction of noise
                 ds = self._ds[idx[s]]
                 ds_norm = np.linalg.norm(ds, axis=1)
-                e = np.divide(ds, ds_norm[:, None], out=np.zeros_like(ds), where=ds_norm[:, None] > 0)
+                moving = ds_norm > self._ds_roundoff[idx[s]]
+                e = np.where(moving[:, None], ds / np.where(moving, ds_norm, 1.0)[:, None], -q)
                 e -= np.sum(e * n[s], axis=1)[:, None] * n[s]  # e^T (I - n n) jump
                 dmu = self.friction.derivative(self._speed[idx[s]])
                 d_radius += (p * dmu / self.dt)[:, None] * np.einsum("pi,pik->pk", e, jump[s])
