@@ -1,13 +1,31 @@
-"""The one place that loads the DOLFINx stack in the right order.
+"""The one place that loads the DOLFINx stack in the right order, and sets the PETSc
+options every run needs.
 
 With the PyPI wheel ``dolfinx-solver-real``, ``import dolfinx_solver`` must come
 before mpi4py/dolfinx/petsc4py/slepc4py (it orders MPI ahead of the compiled
 bindings). Debian's ``python3-dolfinx`` has no such module, so the import is
 guarded. Every module that needs DOLFINx imports this module first (``solver``
 and ``geometry`` do so in their ``__init__``).
+
+Reproducibility: by default PETSc computes the Gram-Schmidt products of GMRES
+(``VecMDot``/``VecMAXPY`` over the contiguous block of Krylov vectors) with BLAS gemv,
+and OpenBLAS's gemv kernels sum in an order that depends on the memory alignment of
+that block, which differs from one solver object to the next. Two runs of the same
+input then differed at round-off (1e-18 m in a Newton correction), which stick-slip
+amplified to 5e-8 relative in the settlement, beyond the 1e-8 a resumed run must meet.
+PETSc's plain loops are deterministic; they are used unless the user's PETSc options
+say otherwise (docs/contact.md, section 6).
 """
 
 try:  # PyPI wheel
     import dolfinx_solver  # noqa: F401
 except ImportError:  # Debian / conda / source builds
     pass
+
+from petsc4py import PETSc  # noqa: E402
+
+_options = PETSc.Options()
+for _name in ("vec_mdot_use_gemv", "vec_maxpy_use_gemv"):
+    if not _options.hasName(_name):
+        _options.setValue(_name, False)
+    _options.getBool(_name)  # marked as used: no "unused option" warning from a run without vectors

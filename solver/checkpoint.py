@@ -5,8 +5,9 @@ A checkpoint is a folder with
 * ``rank<r>.npz`` on every rank: the rank's local arrays (owned and ghost entries) of
   u, v, a [m, m/s, m/s^2], the contact residual at u_n (needed by generalised-alpha)
   [N], and the contact memory of the slave points on this rank (slip velocity of
-  the last step [m/s] and the paired master facet, which the pairing keeps while it
-  is as close as any other);
+  the last step [m/s], the paired master facet, which the pairing keeps while it
+  is as close as any other, and the point's coordinates on that facet, from which the
+  next projection starts);
 * ``manifest.json`` (rank 0): rank count, time [s], and whatever progress record the
   caller passes (stage index, history rows, ...).
 
@@ -57,6 +58,7 @@ def save(folder: str | Path, problem, record: dict[str, Any]) -> None:
     if contact is not None:
         arrays["slip_velocity"] = contact.state.slip_velocity
         arrays["paired_facet"] = contact.pairing.facet
+        arrays["paired_coordinates"] = contact.pairing.s
     np.savez(_rank_file(tmp, comm.rank), **arrays)
     if comm.rank == 0:
         manifest = {"ranks": comm.size, "time_s": problem.t, **record}
@@ -115,5 +117,6 @@ def restore(folder: str | Path, problem) -> dict[str, Any]:
         contact.set_reference(problem.u, None)
         contact.update(problem.u)
         contact.pairing.facet[:] = data["paired_facet"]
+        contact.pairing.s[:] = data["paired_coordinates"]
         contact.state.slip_velocity[:] = data["slip_velocity"]
     return manifest

@@ -87,6 +87,10 @@ class ContactSettings:
     max_iterations: int = 30  #: Newton iterations per step before the step is cut
     max_backtracks: int = 6  #: Newton line-search halvings (solver.nonlinear.ContactNewtonSolver)
     max_gap_change: float = 0.0  #: gap-limited Newton steps [m] (ContactNewtonSolver); 0: off
+    #: sparse LU of the Newton corrections: "mumps" (faster), "superlu_dist" (bitwise repeatable on
+    #: several ranks, where MUMPS's factors vary at round-off from run to run, which stick-slip
+    #: amplifies), or "auto": MUMPS on one rank, SuperLU_DIST on several
+    lu_solver: str = "auto"
 
     def __post_init__(self) -> None:
         if not (isinstance(self.max_iterations, int) and self.max_iterations >= 1):
@@ -103,6 +107,7 @@ class ContactSettings:
         if not self.max_gap_change >= 0:
             raise ValueError(f"max_gap_change must be >= 0 m, got {self.max_gap_change}")
         _check_choice("degree", self.degree, (1, 2, 3))
+        _check_choice("lu_solver", self.lu_solver, ("auto", "mumps", "superlu_dist"))
 
 
 @dataclass(frozen=True)
@@ -585,6 +590,8 @@ def build_joint_model(comm: MPI.Comm, case: InstallationCase) -> JointModel:
             "max_iterations": case.contact.max_iterations,
             "max_backtracks": case.contact.max_backtracks,
             "max_gap_change": case.contact.max_gap_change or None,
+            "lu_solver": case.contact.lu_solver if case.contact.lu_solver != "auto"
+            else ("mumps" if comm.size == 1 else "superlu_dist"),
         },
     )
     problem.initialise(0.0)
