@@ -37,6 +37,7 @@ from solver import backend  # noqa: F401  (before dolfinx/petsc4py)
 import numpy as np
 from dolfinx import fem
 from mpi4py import MPI
+from petsc4py import PETSc
 
 from geometry import tags
 from geometry.contact_map import tp_placement
@@ -108,6 +109,8 @@ class ContactSettings:
             raise ValueError(f"max_gap_change must be >= 0 m, got {self.max_gap_change}")
         _check_choice("degree", self.degree, (1, 2, 3))
         _check_choice("lu_solver", self.lu_solver, ("auto", "mumps", "superlu_dist"))
+        if self.lu_solver != "auto" and not PETSc.Sys.hasExternalPackage(self.lu_solver):
+            raise ValueError(f"lu_solver {self.lu_solver!r}: this PETSc was built without it")
 
 
 @dataclass(frozen=True)
@@ -542,6 +545,15 @@ class JointModel:
         return self.V.dofmap.index_map.size_global * self.V.dofmap.index_map_bs
 
 
+def _lu_package(choice: str, comm: MPI.Comm) -> str:
+    """The PETSc LU package of ``[contact] lu_solver`` ("auto": MUMPS on one rank, SuperLU_DIST,
+    which repeats its arithmetic, on several if PETSc has it)."""
+    if choice != "auto":
+        return choice
+    several = comm.size > 1 and PETSc.Sys.hasExternalPackage("superlu_dist")
+    return "superlu_dist" if several else "mumps"
+
+
 def build_joint_model(comm: MPI.Comm, case: InstallationCase) -> JointModel:
     """Set up the joint of ``case`` at rest in its first-contact position (collective)."""
     t0 = time.perf_counter()
@@ -590,8 +602,7 @@ def build_joint_model(comm: MPI.Comm, case: InstallationCase) -> JointModel:
             "max_iterations": case.contact.max_iterations,
             "max_backtracks": case.contact.max_backtracks,
             "max_gap_change": case.contact.max_gap_change or None,
-            "lu_solver": case.contact.lu_solver if case.contact.lu_solver != "auto"
-            else ("mumps" if comm.size == 1 else "superlu_dist"),
+            "lu_solver": _lu_package(case.contact.lu_solver, comm),
         },
     )
     problem.initialise(0.0)
