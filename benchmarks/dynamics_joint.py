@@ -95,6 +95,8 @@ def main(argv=None) -> int:
     p.add_argument("--backtracks", type=int, default=4, help="Newton step halvings when ||F|| grows")
     p.add_argument("--refactor-after", type=int, default=25,
                    help="GMRES iterations before refactorising A + J_c (0: LU every Newton iteration)")
+    p.add_argument("--lu-solver", choices=("mumps", "superlu_dist"), default="mumps",
+                   help="LU package of the Newton corrections (superlu_dist: repeatable on several ranks)")
     p.add_argument("--krylov-rtol", type=float, default=1e-11, help="tightest GMRES tolerance of the Newton corrections")
     p.add_argument("--forcing-max", type=float, default=None,
                    help="largest GMRES tolerance (Eisenstat-Walker; 0: every correction to --krylov-rtol; "
@@ -127,7 +129,8 @@ def main(argv=None) -> int:
     problem = Elastodynamics(V, M, K, bcs, load=loading, scheme=GeneralisedAlpha.from_spectral_radius(a.rho_inf),
                              damping=RayleighDamping.at_frequency(a.zeta, a.zeta_frequency), contact=contact,
                              newton_options={"max_backtracks": a.backtracks, "refactor_after": a.refactor_after,
-                                             "max_gap_change": a.max_gap_change, "krylov_rtol": a.krylov_rtol}
+                                             "max_gap_change": a.max_gap_change, "krylov_rtol": a.krylov_rtol,
+                                             "lu_solver": a.lu_solver}
                              | ({} if a.forcing_max is None else {"forcing_max": a.forcing_max})
                              | ({} if a.newton_rtol is None else {"rtol": a.newton_rtol}))
     problem.initialise(0.0)
