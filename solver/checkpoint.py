@@ -98,6 +98,15 @@ def restore(folder: str | Path, problem) -> dict[str, Any]:
     comm: MPI.Comm = problem.V.mesh.comm
     manifest = read_manifest(folder, comm)
     data = np.load(_rank_file(Path(folder), comm.rank))
+    required = ["u", "v", "a", "r_contact_old"]
+    if problem.contact is not None:
+        required += ["slip_velocity", "paired_facet", "paired_coordinates"]
+    missing = [key for key in required if key not in data.files]
+    if comm.allreduce(bool(missing), op=MPI.LOR):
+        raise ValueError(
+            f"checkpoint {folder} lacks {', '.join(missing) or 'arrays on another rank'} (written by "
+            "an older version of the code?): rerun without --resume"
+        )
     ok = all(
         data[k].shape == f.x.array.shape
         for k, f in (("u", problem.u), ("v", problem.v), ("a", problem.a))

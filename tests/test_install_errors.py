@@ -2,6 +2,7 @@
 
 from pathlib import Path
 
+import numpy as np
 import pytest
 from mpi4py import MPI
 
@@ -128,3 +129,27 @@ def test_resume_needs_the_same_rank_count(tmp_path_factory):
     comm.barrier()
     with pytest.raises(ValueError, match=rf"written by {comm.size + 1} rank\(s\).*not {comm.size}"):
         checkpoint.read_manifest(folder, comm)
+
+
+def test_resume_needs_a_complete_checkpoint(tmp_path_factory):
+    """A checkpoint without the contact memory (e.g. from before the pairing coordinates were
+    saved) is refused with a clear error, not a KeyError."""
+    import json
+    from types import SimpleNamespace
+
+    from solver import checkpoint
+
+    comm = MPI.COMM_WORLD
+    folder = Path(comm.bcast(str(tmp_path_factory.mktemp("old_ckpt")) if comm.rank == 0 else None, root=0))
+    if comm.rank == 0:
+        (folder / checkpoint.MANIFEST).write_text(json.dumps({"ranks": comm.size, "time_s": 0.1}))
+    comm.barrier()
+    state = np.zeros(6)
+    np.savez(folder / f"rank{comm.rank}.npz", u=state, v=state, a=state, r_contact_old=state,
+             slip_velocity=np.zeros((2, 3)), paired_facet=np.zeros(2, dtype=int))
+    comm.barrier()
+    function = SimpleNamespace(x=SimpleNamespace(array=state.copy()))
+    problem = SimpleNamespace(V=SimpleNamespace(mesh=SimpleNamespace(comm=comm)), u=function, v=function,
+                              a=function, contact=object())
+    with pytest.raises(ValueError, match="lacks paired_coordinates.*without --resume"):
+        checkpoint.restore(folder, problem)
