@@ -10,7 +10,8 @@ Files (in the output folder; CSV headers carry units):
   ``contact_status_<k>.png`` (contact status unwrapped in angle and z after stage k);
 * ``displacement_<k>.bp`` (VTX) and ``contact_<k>.vtp`` (slave points with status,
   pressure, slip velocity) after stage k;
-* ``summary.txt``: the one-screen summary printed at the end.
+* ``summary.txt``: the one-screen summary printed at the end, with the frequency selectivity
+  of the run (``frequency_selectivity``).
 
 Stick-slip events: the TP slips as a whole while its settlement rate, averaged over one
 excitation period in vibration stages (one step otherwise), exceeds ``slip_rate_mm_s``;
@@ -173,6 +174,53 @@ def format_stage(s: dict) -> str:
     )
 
 
+SELECTIVE = 5.0  #: SPEC 5.2 criterion: a modal stage settles >= SELECTIVE x the control [-]
+
+
+def frequency_selectivity(stages: list[dict], excitations) -> list[dict[str, float]]:
+    """Settlement rate of each modal vibration stage over that of the control stage at the
+    same amplitude (SPEC 5.2: frequency-driven settlement).
+
+    ``stages`` are the stage summaries (stage 0 the self-weight, stage k >= 1 excited by
+    ``excitations[k - 1]``). Rates are gains over the stage duration [mm/s], so stages of
+    different lengths compare. One row per modal stage: frequency_Hz, rate_mm_s,
+    control_rate_mm_s, ratio (inf when the control did not settle); empty without a control.
+    """
+    roles = {k + 1: e for k, e in enumerate(excitations)}
+
+    def rate(s: dict) -> float:
+        return s["gained_mm"] / (s["end_s"] - s["start_s"])
+
+    controls = [s for s in stages if s["stage"] in roles and roles[s["stage"]].role == "control"]
+    if not controls or not controls[0]["steps"]:
+        return []
+    control = controls[0]
+    c = rate(control)
+    rows = []
+    for s in stages:
+        e = roles.get(s["stage"])
+        if e is None or e.role != "modal" or not s["steps"] or e.amplitude_N != roles[control["stage"]].amplitude_N:
+            continue
+        r = rate(s)
+        rows.append({"frequency_Hz": s["frequency_Hz"], "rate_mm_s": r, "control_Hz": control["frequency_Hz"],
+                     "control_rate_mm_s": c, "ratio": r / c if c > 0 else np.inf})
+    return rows
+
+
+def format_selectivity(rows: list[dict[str, float]]) -> list[str]:
+    """Summary lines of ``frequency_selectivity`` (none without a control stage)."""
+    if not rows:
+        return []
+    shown = all(r["ratio"] >= SELECTIVE for r in rows)
+    return [
+        f"frequency selectivity (SPEC 5.2: modal stages settle >= {SELECTIVE:g} x faster than the "
+        f"control): {'shown' if shown else 'NOT shown'} by this run",
+        f"  control {rows[0]['control_Hz']:8.2f} Hz: {rows[0]['control_rate_mm_s']:+.4f} mm/s",
+        *(f"  modal   {r['frequency_Hz']:8.2f} Hz: {r['rate_mm_s']:+.4f} mm/s = {r['ratio']:.2f} x the control"
+          for r in rows),
+    ]
+
+
 def contact_counts(contact: NitscheContact) -> dict[str, float]:
     """Fractions of the slave points open / stick / slip (all ranks)."""
     comm = contact.V.mesh.comm
@@ -216,6 +264,7 @@ def format_summary(summary: dict, stages: list[dict], excitations) -> str:
         ),
         "excitation frequencies: "
         + ", ".join(f"{e.frequency_Hz:.1f} Hz ({e.role})" for e in excitations),
+        *format_selectivity(frequency_selectivity(stages, excitations)),
         "=" * 78,
     ]
     return "\n".join(lines)
