@@ -941,7 +941,7 @@ class Installation:
             self.history.append(row)
             writer.write(row)
             if bar is not None:
-                bar.update(row["dt_s"])
+                bar.update(min(row["dt_s"], bar.total - bar.n))  # sums of dt overshoot by round-off
                 bar.set_postfix_str(
                     f"{plan.name}, dt {row['dt_s']:.3g} s, "
                     f"settlement {row['settlement_mm']:.4f} mm, Newton {row['newton_iterations']}",
