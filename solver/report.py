@@ -184,7 +184,8 @@ def frequency_selectivity(stages: list[dict], excitations) -> list[dict[str, flo
     ``stages`` are the stage summaries (stage 0 the self-weight, stage k >= 1 excited by
     ``excitations[k - 1]``). Rates are gains over the stage duration [mm/s], so stages of
     different lengths compare. One row per modal stage: frequency_Hz, rate_mm_s,
-    control_rate_mm_s, ratio (inf when the control did not settle); empty without a control.
+    control_rate_mm_s, ratio (when the control did not settle: inf if the modal stage did, else
+    0); empty without a control.
     """
     roles = {k + 1: e for k, e in enumerate(excitations)}
 
@@ -203,7 +204,7 @@ def frequency_selectivity(stages: list[dict], excitations) -> list[dict[str, flo
             continue
         r = rate(s)
         rows.append({"frequency_Hz": s["frequency_Hz"], "rate_mm_s": r, "control_Hz": control["frequency_Hz"],
-                     "control_rate_mm_s": c, "ratio": r / c if c > 0 else np.inf})
+                     "control_rate_mm_s": c, "ratio": r / c if c > 0 else (np.inf if r > 0 else 0.0)})
     return rows
 
 

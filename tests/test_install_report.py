@@ -42,6 +42,17 @@ def test_a_control_that_settles_as_much_is_reported():
     assert "NOT shown" in format_selectivity(rows)[0]
 
 
+def test_nothing_settled_is_not_selectivity():
+    """A control that did not settle makes a settling modal stage infinitely selective, and a
+    modal stage that did not settle either not selective at all."""
+    stages = [_stage(0, 0.0, 0.0, 2.0, 2.4), _stage(1, 352.0, 2.0, 2.03, 0.0),
+              _stage(2, 451.0, 2.03, 2.06, 0.0), _stage(3, 487.0, 2.06, 2.09, 0.01)]
+    excitations = [_excitation(352.0, "modal"), _excitation(451.0, "control"), _excitation(487.0, "modal")]
+    rows = frequency_selectivity(stages, excitations)
+    assert [r["ratio"] for r in rows] == [0.0, np.inf]
+    assert "NOT shown" in format_selectivity(rows)[0]
+
+
 def test_no_control_no_lines():
     stages = [_stage(0, 0.0, 0.0, 2.0, 2.4), _stage(1, 352.0, 2.0, 2.03, 0.05)]
     assert frequency_selectivity(stages, [_excitation(352.0, "modal")]) == []
