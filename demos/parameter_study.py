@@ -40,6 +40,7 @@ DEFAULT = demo_cli.COARSE_FRICTIONAL + [
     "vibration.n_modes=20",
     "vibration.lead_in_hz=[]",
     "vibration.n_frequencies=1",
+    "vibration.m2n1_mode=false",
     "vibration.stage_duration_s=0.03",
     "output.paraview=false",
 ]

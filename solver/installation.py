@@ -214,6 +214,7 @@ class VibrationSettings:
     )
     n_modes: int = 12  #: modes computed in the modal stage
     max_frequency_hz: float = 300.0  #: ranked modes above this are not excited [Hz]
+    m2n1_mode: bool = True  #: add the lowest (m = 2, n = 1) mode, also above max_frequency_hz
     control: bool = True  #: insert a non-modal control frequency
     modal_stage: bool = True  #: false: no modal stage (needs a [[schedule]] without mode/ranked)
 
@@ -236,6 +237,9 @@ class VibrationSettings:
             raise ValueError(f"n_modes must be an integer >= 2, got {self.n_modes!r}")
         if not self.max_frequency_hz > 0:
             raise ValueError(f"max_frequency_hz must be positive, got {self.max_frequency_hz}")
+        for name in ("m2n1_mode", "control", "modal_stage"):
+            if not isinstance(getattr(self, name), bool):
+                raise ValueError(f"{name} must be true or false, got {getattr(self, name)!r}")
 
     def stage(self, duration_s: float, frequency_hz: float, amplitude: float | str) -> Stage:
         return Stage(
@@ -698,16 +702,19 @@ def choose_frequencies(records: list[ModeRecord], settings: VibrationSettings) -
     * the ``n_frequencies`` best-ranked distinct frequencies up to ``max_frequency_hz``
       (one per degenerate pair: modes within ``PAIR_TOLERANCE`` of a chosen frequency are
       its partner);
-    * the lowest (m = 2, n = 1) mode if not among them (SPEC 5.4: the most effective);
-    * a control frequency: the point between the lowest and highest chosen natural
-      frequency farthest from every computed natural frequency (with a single chosen
-      frequency f: between f/2 and min(1.5 f, max_frequency_hz)).
+    * the lowest (m = 2, n = 1) mode among all computed modes if not among them (SPEC 5.4: the
+      most effective; also above ``max_frequency_hz``, unless ``m2n1_mode`` is false);
+    * a non-modal control frequency: the point of [f_lo / 2, f_hi] farthest from every computed
+      natural frequency in ratio (|ln(f / f_n)|: the dynamic amplification of a mode depends
+      on f / f_n), f_lo and f_hi the lowest and highest chosen natural frequency (with a single
+      chosen frequency f: f_hi = min(1.5 f, max_frequency_hz)). The octave below f_lo admits a
+      control in the quasi-static band below the lowest modes, where a point between dense
+      higher modes may lie within a few per cent of one (docs/install.md).
     Stages are returned in increasing frequency after the lead-in.
     """
     # below MIN_FREQUENCY_HZ: rigid-body motions of a part the contact does not hold, not modes
-    candidates = [
-        r for r in records if MIN_FREQUENCY_HZ <= r.frequency_Hz <= settings.max_frequency_hz
-    ]
+    modes = [r for r in records if r.frequency_Hz >= MIN_FREQUENCY_HZ]
+    candidates = [r for r in modes if r.frequency_Hz <= settings.max_frequency_hz]
     chosen: list[Excitation] = []
 
     def same_pair(r: ModeRecord) -> bool:  # the partner of a degenerate pair (or a near-tie)
@@ -732,30 +739,34 @@ def choose_frequencies(records: list[ModeRecord], settings: VibrationSettings) -
                 f"{max(r.resonant_slip_axial_um, r.resonant_slip_lateral_um):.3g} um",
             )
         )
-    m2n1 = [r for r in candidates if (r.m, r.n) == (2, 1)]
-    if m2n1 and all((c.m, c.n) != (2, 1) for c in chosen) and not same_pair(min(m2n1, key=lambda r: r.frequency_Hz)):
+    m2n1 = [r for r in modes if (r.m, r.n) == (2, 1)]
+    if settings.m2n1_mode and m2n1 and all((c.m, c.n) != (2, 1) for c in chosen):
         r = min(m2n1, key=lambda r: r.frequency_Hz)
-        chosen.append(
-            Excitation(
-                r.frequency_Hz,
-                settings.amplitude_N,
-                "modal",
-                r.mode,
-                r.m,
-                r.n,
-                r.rank,
-                "lowest m = 2, n = 1 mode (SPEC 5.4: most effective in the experiments)",
+        if not same_pair(r):
+            above = (f", above the ranked choice's {settings.max_frequency_hz:g} Hz"
+                     if r.frequency_Hz > settings.max_frequency_hz else "")
+            chosen.append(
+                Excitation(
+                    r.frequency_Hz,
+                    settings.amplitude_N,
+                    "modal",
+                    r.mode,
+                    r.m,
+                    r.n,
+                    r.rank,
+                    f"lowest m = 2, n = 1 mode (SPEC 5.4: most effective in the experiments{above})",
+                )
             )
-        )
     chosen.sort(key=lambda e: e.frequency_Hz)
     if settings.control and chosen:
-        natural = np.array([r.frequency_Hz for r in records])
+        natural = np.array([r.frequency_Hz for r in modes])
         lo, hi = chosen[0].frequency_Hz, chosen[-1].frequency_Hz
         if hi - lo < 1e-6 * hi:
-            lo, hi = 0.5 * lo, min(1.5 * hi, settings.max_frequency_hz)
-        grid = np.linspace(lo, hi, 2001)
-        distance = np.min(np.abs(grid[:, None] - natural[None, :]), axis=1)
-        f_c = float(grid[np.argmax(distance)])
+            hi = min(1.5 * hi, settings.max_frequency_hz)
+        grid = np.geomspace(0.5 * lo, hi, 2001)
+        ratio = np.min(np.abs(np.log(grid[:, None] / natural[None, :])), axis=1)
+        f_c = float(grid[np.argmax(ratio)])
+        nearest = float(natural[np.argmin(np.abs(np.log(f_c / natural)))])
         chosen.append(
             Excitation(
                 f_c,
@@ -765,7 +776,8 @@ def choose_frequencies(records: list[ModeRecord], settings: VibrationSettings) -
                 -1,
                 -1,
                 0,
-                f"non-modal control: {distance.max():.1f} Hz from the nearest natural frequency",
+                f"non-modal control: a factor {np.exp(ratio.max()):.2f} from the nearest natural "
+                f"frequency ({nearest:.1f} Hz)",
             )
         )
         chosen.sort(key=lambda e: e.frequency_Hz)

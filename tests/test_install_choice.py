@@ -41,12 +41,12 @@ def test_best_ranks_plus_m2n1_plus_control():
     assert sorted(e.frequency_Hz for e in modal) == [86.0, 120.0, 150.0]
     assert "m = 2, n = 1" in next(e for e in modal if e.frequency_Hz == 120.0).reason
     (control,) = [e for e in chosen if e.role == "control"]
-    natural = np.array([r.frequency_Hz for r in RECORDS])
-    assert 86.0 <= control.frequency_Hz <= 150.0
     assert all(e.frequency_Hz != 86.4 for e in chosen)
-    # farthest point from all natural frequencies in [86, 150]: midway between 120 and 150
-    assert control.frequency_Hz == pytest.approx(135.0, abs=0.05)
-    assert np.min(np.abs(natural - control.frequency_Hz)) == pytest.approx(15.0, abs=0.05)
+    # the point of [86 / 2, 150] farthest in ratio from all natural frequencies: the geometric
+    # mean of 50 and 86 (a factor 1.311 from both; 43 Hz is 1.163 from 50 Hz, the gap between
+    # 120 and 150 Hz 1.118 from either side)
+    assert control.frequency_Hz == pytest.approx(np.sqrt(50.0 * 86.0), abs=0.05)
+    assert "a factor 1.31 " in control.reason
     assert all(e.amplitude_N == 3600.0 for e in chosen if e.role != "lead-in")
     assert all(e.reason for e in chosen)
 
@@ -57,7 +57,8 @@ def test_single_frequency_control_stays_below_the_limit():
         records, VibrationSettings(n_frequencies=1, lead_in_hz=(), max_frequency_hz=300.0)
     )
     control = next(e for e in chosen if e.role == "control")
-    assert 0.5 * 233.0 <= control.frequency_Hz <= 300.0
+    # [233 / 2, 300]: an octave below the mode beats 300 Hz (a factor 1.29 above it)
+    assert control.frequency_Hz == pytest.approx(0.5 * 233.0)
     assert [e.role for e in chosen] == ["control", "modal"]  # increasing frequency
 
 
@@ -70,7 +71,7 @@ def test_pair_partner_is_not_a_second_frequency():
     )
     assert [e.frequency_Hz for e in chosen if e.role == "modal"] == [138.27]
     control = next(e for e in chosen if e.role == "control")
-    assert min(abs(control.frequency_Hz - r.frequency_Hz) for r in records) > 0.2 * 138.27
+    assert control.frequency_Hz == pytest.approx(0.5 * 138.27)  # not between 138.27 and 140.48
 
 
 def test_rigid_body_modes_are_not_excited():
@@ -82,3 +83,26 @@ def test_rigid_body_modes_are_not_excited():
     )
     assert [e.frequency_Hz for e in chosen if e.role == "modal"] == [140.0]
     assert resonant_slip(0.1, 1e-3, 0.0, 3600.0, 0.01) == np.inf  # (was a ZeroDivisionError)
+
+
+def test_m2n1_mode_is_added_above_the_limit():
+    """SPEC 5.4: the lowest (2, 1) mode is excited even above max_frequency_hz (on a coarse,
+    stiff mesh it lies far above the ranked modes), unless m2n1_mode is false; the control
+    then lies in the octave below the lowest mode, not between the dense higher modes."""
+    records = [_record(1, 142.0, 1, 0, 4), _record(2, 352.0, 1, 0, 1), _record(3, 380.0, 2, 0, 2),
+               _record(4, 487.0, 2, 1, 3), _record(5, 487.1, 2, 1, 5)]
+    chosen = choose_frequencies(
+        records, VibrationSettings(n_frequencies=1, lead_in_hz=(), max_frequency_hz=300.0)
+    )
+    assert [(e.role, e.frequency_Hz) for e in chosen] == [
+        ("control", pytest.approx(71.0)), ("modal", 142.0), ("modal", 487.0)]
+    assert "above the ranked choice's 300 Hz" in chosen[-1].reason
+    without = choose_frequencies(records, VibrationSettings(
+        n_frequencies=1, lead_in_hz=(), max_frequency_hz=300.0, m2n1_mode=False))
+    assert [e.frequency_Hz for e in without if e.role == "modal"] == [142.0]
+
+
+@pytest.mark.parametrize("name", ["m2n1_mode", "control", "modal_stage"])
+def test_switches_must_be_booleans(name):
+    with pytest.raises(ValueError, match=f"{name} must be true or false"):
+        VibrationSettings(**{name: "yes"})
