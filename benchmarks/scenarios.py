@@ -41,7 +41,7 @@ from solver import backend  # noqa: E402,F401
 import numpy as np  # noqa: E402
 from mpi4py import MPI  # noqa: E402
 
-from solver import checkpoint  # noqa: E402
+from solver import checkpoint, report  # noqa: E402
 from solver.case import read_case  # noqa: E402
 from solver.dynamics import Observer, run  # noqa: E402
 from solver.installation import (  # noqa: E402
@@ -117,8 +117,7 @@ def gain(history: np.ndarray) -> float:
 
 def late_gain(history: np.ndarray, fraction: float = LATE) -> float:
     """Settlement gained over the last ``fraction`` of a stage [mm]."""
-    t, s = history.T
-    return float(s[-1] - np.interp(t[-1] - fraction * (t[-1] - t[0]), t, s))
+    return report.late_gain(*history.T, fraction)
 
 
 def stabilised(history: np.ndarray) -> bool:

@@ -1,17 +1,46 @@
-"""The frequency-selectivity lines of the installation summary (no finite elements involved)."""
+"""The stage gains and frequency-selectivity lines of the installation summary (no finite
+elements involved)."""
+
+from types import SimpleNamespace
 
 import numpy as np
+import pytest
 
 from solver.installation import Excitation
-from solver.report import SELECTIVE, format_selectivity, frequency_selectivity
+from solver.report import (SELECTIVE, format_selectivity, frequency_selectivity, late_gain,
+                           stage_summary)
 
 
-def _stage(k: int, f: float, start: float, end: float, gained: float) -> dict:
-    return {"stage": k, "frequency_Hz": f, "start_s": start, "end_s": end, "gained_mm": gained, "steps": 10}
+def _stage(k: int, f: float, start: float, end: float, gained: float, second_half=None) -> dict:
+    """A stage summary; without ``second_half`` the stage settles at a constant rate."""
+    return {"stage": k, "frequency_Hz": f, "start_s": start, "end_s": end, "gained_mm": gained,
+            "gained_second_half_mm": 0.5 * gained if second_half is None else second_half,
+            "steps": 10}
 
 
 def _excitation(f: float, role: str, amplitude=3600.0) -> Excitation:
     return Excitation(f, amplitude, role, 0, 0, 0, 0, "")
+
+
+def test_late_gain_interpolates_between_rows():
+    t, s = np.array([0.0, 1.0, 2.0, 3.0, 4.0]), np.array([0.0, 1.0, 1.5, 1.5, 2.0])
+    assert late_gain(t, s, 0.5) == pytest.approx(0.5)  # s(4) - s(2)
+    assert late_gain(t, s, 0.2) == pytest.approx(0.4)  # s(4) - s(3.2) = 2 - 1.6
+    assert late_gain(t, s, 1.0) == pytest.approx(2.0)
+
+
+def test_stage_summary_gains_start_from_the_previous_stage():
+    """The stage's gains count from the last row of the stages before it (2.0 s, 3.0 mm)."""
+    history = [{"stage": 0, "time_s": 1.0, "settlement_mm": 2.5, "newton_iterations": 1},
+               {"stage": 0, "time_s": 2.0, "settlement_mm": 3.0, "newton_iterations": 1}]
+    rows = [{"stage": 1, "time_s": 2.0 + 0.01 * k, "settlement_mm": s, "newton_iterations": 3}
+            for k, s in enumerate([3.5, 3.6, 3.6, 3.6, 3.7], start=1)]
+    plan = SimpleNamespace(name="vibration 1", start_s=2.0, end_s=2.05, dt_s=0.01,
+                           frequency_Hz=100.0, amplitude_N=3600.0, reason="")
+    s = stage_summary(1, plan, rows, history + rows, slip_rate_mm_s=1.0)
+    assert s["gained_mm"] == pytest.approx(0.7)
+    assert s["gained_second_half_mm"] == pytest.approx(0.1)  # s(2.05) - s(2.025) = 3.7 - 3.6
+    assert s["gained_last_20pct_mm"] == pytest.approx(0.1)  # s(2.05) - s(2.04)
 
 
 def test_rates_compare_stages_of_different_lengths():
@@ -25,11 +54,28 @@ def test_rates_compare_stages_of_different_lengths():
     rows = frequency_selectivity(stages, excitations)
     assert [r["frequency_Hz"] for r in rows] == [300.0]
     assert np.isclose(rows[0]["rate_mm_s"], 0.05 / 0.03)
+    assert np.isclose(rows[0]["stage_rate_mm_s"], 0.05 / 0.03)
     assert np.isclose(rows[0]["control_rate_mm_s"], 0.01 / 0.06)
-    assert np.isclose(rows[0]["ratio"], 10.0)
+    assert np.isclose(rows[0]["ratio"], 10.0) and np.isclose(rows[0]["stage_ratio"], 10.0)
     lines = format_selectivity(rows)
     assert "shown by this run" in lines[0] and "NOT" not in lines[0]
     assert "10.00 x the control" in lines[-1]
+
+
+def test_verdict_is_on_the_second_half_of_each_stage():
+    """The default run's case (session 7): the control settles 33.95 um, all but 0.97 um of it
+    in its first half (an event that stabilises), the modal stage 59.00 um, 38.32 um of it in
+    its second half: 1.74 x over the whole stage, 39.5 x over the second half."""
+    stages = [_stage(0, 0.0, 0.0, 2.0, 2.4), _stage(1, 70.98, 2.10, 2.15, 0.03395, 0.00097),
+              _stage(2, 141.96, 2.15, 2.20, 0.05900, 0.03832)]
+    rows = frequency_selectivity(stages, [_excitation(70.98, "control"),
+                                          _excitation(141.96, "modal")])
+    assert rows[0]["ratio"] == pytest.approx(0.03832 / 0.00097)
+    assert rows[0]["stage_ratio"] == pytest.approx(0.05900 / 0.03395)
+    assert rows[0]["control_rate_mm_s"] == pytest.approx(0.00097 / 0.025)
+    lines = format_selectivity(rows)
+    assert "shown by this run" in lines[0] and "NOT" not in lines[0]
+    assert "39.51 x the control (whole stage +1.1800 mm/s = 1.74 x)" in lines[-1]
 
 
 def test_a_control_that_settles_as_much_is_reported():
