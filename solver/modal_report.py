@@ -217,6 +217,8 @@ def plot_modes(
 ) -> None:
     """PNG grid of the deformed shapes, coloured by |u| and labelled f, m, n (rank 0 draws)."""
     os.environ.setdefault("PYVISTA_OFF_SCREEN", "true")
+    if not os.environ.get("DISPLAY"):  # headless: VTK would try X first and print a warning
+        os.environ.setdefault("VTK_DEFAULT_OPENGL_WINDOW", "vtkEGLRenderWindow")
     V = result.V
     comm = V.mesh.comm
     topology, cell_types, x = plot.vtk_mesh(V)
