@@ -56,10 +56,6 @@ from solver.loads import Schedule, Stage  # noqa: E402
 from solver.modal_report import JointParts, describe_modes  # noqa: E402
 from solver.demo_cli import COARSE_FRICTIONAL  # noqa: E402  (the default run's joint and contact settings)
 
-LATE = 0.2  #: stabilisation: the last LATE of a stage ...
-LATE_SHARE = 0.05  #: ... adds less than LATE_SHARE of the stage's gain (SPEC 5.2)
-
-
 @dataclass
 class SettledJoint:
     """The joint after its self-weight stage and the frequencies chosen from its modes [Hz]."""
@@ -115,14 +111,14 @@ def gain(history: np.ndarray) -> float:
     return float(history[-1, 1] - history[0, 1])
 
 
-def late_gain(history: np.ndarray, fraction: float = LATE) -> float:
+def late_gain(history: np.ndarray, fraction: float = report.LATE) -> float:
     """Settlement gained over the last ``fraction`` of a stage [mm]."""
     return report.late_gain(*history.T, fraction)
 
 
 def stabilised(history: np.ndarray) -> bool:
     """SPEC 5.2: the stage settled, and its last 20 % added less than 5 % of its gain."""
-    return gain(history) > 0 and abs(late_gain(history)) < LATE_SHARE * gain(history)
+    return report.stabilised(gain(history), late_gain(history))
 
 
 def main(argv=None) -> int:

@@ -62,6 +62,9 @@ STAGE_COLUMNS = [
     "reason",
 ]
 
+LATE = 0.2  #: SPEC 5.2 "each event stabilises": the last LATE of a stage ...
+LATE_SHARE = 0.05  #: ... adds less than LATE_SHARE of the stage's gain [-]
+
 
 def _fmt(v: Any) -> str:
     return f"{v:.10g}" if isinstance(v, float) else str(v)
@@ -142,7 +145,7 @@ def stage_summary(
         "settlement_end_mm": float(s[-1]) if len(s) else s0,
         "gained_mm": (float(s[-1]) if len(s) else s0) - s0,
         "gained_second_half_mm": late_gain(ts, ss, 0.5),
-        "gained_last_20pct_mm": late_gain(ts, ss, 0.2),
+        "gained_last_20pct_mm": late_gain(ts, ss, LATE),
         "stick_slip_events": stick_slip_events(t, s, s0, t0, window, slip_rate_mm_s),
         "newton_iterations_mean": float(its.mean()),
         "newton_iterations_max": int(its.max()),
@@ -187,6 +190,35 @@ def format_stage(s: dict) -> str:
 
 
 SELECTIVE = 5.0  #: SPEC 5.2 criterion: a modal stage settles >= SELECTIVE x the control [-]
+
+
+def stabilised(gained_mm: float, late_gained_mm: float) -> bool:
+    """SPEC 5.2: a stage that settled (gain > 0) whose last ``LATE`` added less than
+    ``LATE_SHARE`` of its gain."""
+    return gained_mm > 0 and abs(late_gained_mm) < LATE_SHARE * gained_mm
+
+
+def format_stabilisation(stages: list[dict]) -> list[str]:
+    """Summary lines: which vibration stages ended at rest (SPEC 5.2), with the share of their
+    gain in their last 20 %; none without vibration stages."""
+    groups: dict[str, list[str]] = {"stabilised": [], "still settling": [], "no settlement": []}
+    for s in stages:
+        if not s["frequency_Hz"] or not s["steps"]:
+            continue
+        f = f"{s['frequency_Hz']:.1f} Hz"
+        if s["gained_mm"] <= 0:
+            groups["no settlement"].append(f)
+        else:
+            share = f"{f} ({100 * s['gained_last_20pct_mm'] / s['gained_mm']:.1f} %)"
+            key = "stabilised" if stabilised(s["gained_mm"], s["gained_last_20pct_mm"]) else "still settling"
+            groups[key].append(share)
+    if not any(groups.values()):
+        return []
+    return [
+        f"settlement events (SPEC 5.2: stabilised when the last {100 * LATE:g} % of the stage adds "
+        f"< {100 * LATE_SHARE:g} % of its gain):",
+        *(f"  {key}: {', '.join(items)}" for key, items in groups.items() if items),
+    ]
 
 
 def frequency_selectivity(stages: list[dict], excitations) -> list[dict[str, float]]:
@@ -290,6 +322,7 @@ def format_summary(summary: dict, stages: list[dict], excitations) -> str:
         ),
         "excitation frequencies: "
         + ", ".join(f"{e.frequency_Hz:.1f} Hz ({e.role})" for e in excitations),
+        *format_stabilisation(stages),
         *format_selectivity(frequency_selectivity(stages, excitations)),
         "=" * 78,
     ]

@@ -7,8 +7,8 @@ import numpy as np
 import pytest
 
 from solver.installation import Excitation
-from solver.report import (SELECTIVE, format_selectivity, frequency_selectivity, late_gain,
-                           stage_summary)
+from solver.report import (SELECTIVE, format_selectivity, format_stabilisation,
+                           frequency_selectivity, late_gain, stabilised, stage_summary)
 
 
 def _stage(k: int, f: float, start: float, end: float, gained: float, second_half=None) -> dict:
@@ -103,3 +103,21 @@ def test_no_control_no_lines():
     stages = [_stage(0, 0.0, 0.0, 2.0, 2.4), _stage(1, 352.0, 2.0, 2.03, 0.05)]
     assert frequency_selectivity(stages, [_excitation(352.0, "modal")]) == []
     assert format_selectivity([]) == []
+
+
+def test_stabilisation_lines_sort_the_vibration_stages():
+    """The default run's stages (session 7; gain and last-20 % gain in mm): 68 Hz and the
+    71 Hz control end at rest, 100, 142 and 487 Hz still settle; a stage without settlement
+    and the self-weight stage are reported apart / left out."""
+    def st(f, gained, late):
+        return {"frequency_Hz": f, "steps": 10, "gained_mm": gained, "gained_last_20pct_mm": late}
+
+    stages = [st(0.0, 2.4439, 0.2699), st(68.0, 0.6693, -0.00004), st(100.0, 0.1094, 0.01945),
+              st(70.98, 0.03395, 0.00038), st(141.96, 0.0590, 0.01443), st(486.79, 0.1727, 0.03175),
+              st(300.0, 0.0, 0.0)]
+    lines = format_stabilisation(stages)
+    assert lines[1] == "  stabilised: 68.0 Hz (-0.0 %), 71.0 Hz (1.1 %)"
+    assert lines[2] == "  still settling: 100.0 Hz (17.8 %), 142.0 Hz (24.5 %), 486.8 Hz (18.4 %)"
+    assert lines[3] == "  no settlement: 300.0 Hz"
+    assert stabilised(1.0, 0.049) and not stabilised(1.0, 0.051) and not stabilised(0.0, 0.0)
+    assert format_stabilisation([st(0.0, 2.4, 0.3)]) == []
