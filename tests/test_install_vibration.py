@@ -43,6 +43,11 @@ those with which the other three tests passed on both before it was added): self
 20.8), (c) +0.248 mm. d_c = 1 (same f_r, f_c; self-weight 2.4426 mm): lead-in +0.621 mm
 (1.8 % in its last 20 %); (a) +0.0613 mm, (b) +0.0075 mm: ratio 8.2, xfail.
 
+Re-measured in session 7 (serial, the d_c = 100 tests; the self-weight now settles 2.6006 mm,
+f_r = 142.17 Hz, f_c = 71.08 Hz): lead-in +0.635 mm (0.2 % in its last 20 %); (a) +0.0561 mm,
+(b) +0.00116 mm (ratio 48.2); (c) +0.207 mm (1.4 %); (a) 20.8 % in its last 20 %. The d_c = 1
+numbers above are older.
+
 Why d_c = 1 does not lose the selectivity here. With d_c = 1, mu(|v|) is within 1 % of mu_s
 for |v| < 10 mm/s (the decay acts at 1/d_c = 1 m/s): Coulomb friction at mu_s, with no
 velocity weakening at any frequency. The normal-force-weighted mean over the slipping points
