@@ -37,6 +37,7 @@ from dolfinx import fem  # noqa: E402
 from geometry import tags  # noqa: E402
 from geometry.mesh import create_joint_mesh  # noqa: E402
 from geometry.parameters import MeshOptions, load_geometry  # noqa: E402
+from solver import checkpoint  # noqa: E402
 from solver.case import resolve_case_path  # noqa: E402
 from solver.contact import NitscheContact  # noqa: E402
 from solver.damping import RayleighDamping  # noqa: E402
@@ -104,6 +105,9 @@ def main(argv=None) -> int:
     p.add_argument("--max-steps", type=int, default=0, help="stop each stage after this many steps (0: no limit)")
     p.add_argument("--quick", action="store_true", help="short stages (smoke run)")
     p.add_argument("--output", default="output/dynamics_joint")
+    p.add_argument("--ramp-checkpoint", default=None, metavar="DIR",
+                   help="after the self-weight stage write its state to DIR; if DIR holds one (same rank count "
+                        "and options), start from it and skip the stage (for experiments on the forcing stage)")
     p.add_argument("--save-displacement", action="store_true",
                    help="write the final owned node coordinates and displacements per rank (.npy) to --output")
     a = p.parse_args(argv)
@@ -150,12 +154,20 @@ def main(argv=None) -> int:
               ("harmonic", ramp_end + a.forcing, 1 / (a.frequency * a.steps_per_period))]
     if a.max_steps:
         stages[1] = ("harmonic", ramp_end + min(a.forcing, a.max_steps * stages[1][2]), stages[1][2])
+    if a.forcing <= 0:
+        stages = stages[:1]
+    if a.ramp_checkpoint and checkpoint.exists(a.ramp_checkpoint, comm):
+        checkpoint.restore(a.ramp_checkpoint, problem)
+        say(f"self-weight stage skipped: state at t = {problem.t:.6g} s from {a.ramp_checkpoint}")
+        stages = stages[1:]
     timer = PhaseTimer().install()
-    for name, t_end, dt in stages[: 2 if a.forcing > 0 else 1]:
+    for name, t_end, dt in stages:
         timer.reset()
         t0, cpu0 = time.perf_counter(), time.process_time()
         rows = run(problem, t_end, dt, observers=[settlement, StepLog(timer, say)], csv_path=out / f"{name}.csv",
                    progress=False)
+        if name == "self-weight" and a.ramp_checkpoint:
+            checkpoint.save(a.ramp_checkpoint, problem, {"stage": name})
         wall, cpu = time.perf_counter() - t0, time.process_time() - cpu0
         its = np.array([r["newton_iterations"] for r in rows])
         say(f"{name}: {len(rows)} steps of {dt:.3g} s, {wall / len(rows):.3f} s/step, Newton iterations "
