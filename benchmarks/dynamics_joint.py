@@ -94,6 +94,9 @@ def main(argv=None) -> int:
     p.add_argument("--zeta-frequency", type=float, default=120.0, help="[Hz]")
     p.add_argument("--lagged-friction", action="store_true", help="mu from the previous step's slip speed")
     p.add_argument("--backtracks", type=int, default=4, help="Newton step halvings when ||F|| grows")
+    p.add_argument("--stall-iterations", type=int, default=None,
+                   help="give up a Newton attempt when its smallest ||F|| is this many iterations old "
+                        "(default: solver.nonlinear's)")
     p.add_argument("--refactor-after", type=int, default=25,
                    help="GMRES iterations before refactorising A + J_c (0: LU every Newton iteration)")
     p.add_argument("--lu-solver", choices=("mumps", "superlu_dist"), default="mumps",
@@ -136,7 +139,8 @@ def main(argv=None) -> int:
                                              "max_gap_change": a.max_gap_change, "krylov_rtol": a.krylov_rtol,
                                              "lu_solver": a.lu_solver}
                              | ({} if a.forcing_max is None else {"forcing_max": a.forcing_max})
-                             | ({} if a.newton_rtol is None else {"rtol": a.newton_rtol}))
+                             | ({} if a.newton_rtol is None else {"rtol": a.newton_rtol})
+                             | ({} if a.stall_iterations is None else {"stall_iterations": a.stall_iterations}))
     problem.initialise(0.0)
     settlement = Settlement(problem.u, joint, data.cell_tags)
     dofs = V.dofmap.index_map.size_global * 3

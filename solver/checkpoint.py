@@ -6,8 +6,9 @@ A checkpoint is a folder with
   u, v, a [m, m/s, m/s^2], the contact residual at u_n (needed by generalised-alpha)
   [N], and the contact memory of the slave points on this rank (slip velocity of
   the last step [m/s], the paired master facet, which the pairing keeps while it
-  is as close as any other, and the point's coordinates on that facet, from which the
-  next projection starts);
+  is as close as any other, the point's coordinates on that facet, from which the
+  next projection starts, and its contact status at the end of the last step, which
+  chooses the next step's Newton start);
 * ``manifest.json`` (rank 0): rank count, time [s], and whatever progress record the
   caller passes (stage index, history rows, ...).
 
@@ -59,6 +60,8 @@ def save(folder: str | Path, problem, record: dict[str, Any]) -> None:
         arrays["slip_velocity"] = contact.state.slip_velocity
         arrays["paired_facet"] = contact.pairing.facet
         arrays["paired_coordinates"] = contact.pairing.s
+        if problem.contact_status is not None:
+            arrays["contact_status"] = problem.contact_status
     np.savez(_rank_file(tmp, comm.rank), **arrays)
     if comm.rank == 0:
         manifest = {"ranks": comm.size, "time_s": problem.t, **record}
@@ -128,4 +131,5 @@ def restore(folder: str | Path, problem) -> dict[str, Any]:
         contact.pairing.facet[:] = data["paired_facet"]
         contact.pairing.s[:] = data["paired_coordinates"]
         contact.state.slip_velocity[:] = data["slip_velocity"]
+        problem.contact_status = data["contact_status"].copy() if "contact_status" in data.files else None
     return manifest

@@ -31,6 +31,7 @@ from petsc4py import PETSc
 from dolfinx import fem
 from dolfinx.fem import petsc as fem_petsc
 
+from solver.contact import Status
 from solver.damping import ModalDamping, RayleighDamping
 from solver.elasticity import Material, epsilon, sigma
 from solver.newmark import GeneralisedAlpha, Scheme
@@ -94,6 +95,7 @@ class Elastodynamics:
         self._f_old, self._f_new = K.createVecLeft(), K.createVecLeft()
         self._b, self._work = K.createVecLeft(), K.createVecLeft()
         self._r_contact_old = K.createVecLeft()  # r_c(u_n), used when alpha_f > 0
+        self.contact_status: np.ndarray | None = None  #: contact status at the end of the last step (this rank's points)
         self.A = K.duplicate(copy=True)
         self._dt_of_A = None
         self._ksp = _lu_solver(V.mesh.comm, self.A, "dynamics_")
@@ -203,6 +205,30 @@ class Elastodynamics:
         b.scale(1.0 / (1.0 - af))
         b.array_w[self._bc_dofs] = 0.0
 
+    def _initial_guesses(self, u_old: np.ndarray, dt: float) -> tuple[np.ndarray, np.ndarray]:
+        """The two starts of a contact step's Newton solve, in order: the predictor and u_n.
+
+        The predictor (constant acceleration; constant velocity when quasi-static) extrapolates
+        the motion, and while the TP slides on (or flies free, or lands) it is the better start.
+        Where it stops or reverses, the predictor slides it on, and with the slip direction
+        fixed the linearised friction has a negative stiffness along it (about -mu gamma
+        sin(alpha) per unit area on the cone): Newton cycles between stick and slip of the
+        bearing points or leaves by centimetres. So where some point's status at the predictor
+        changes between stick and slip against the last step's (open <-> contact changes do
+        not count), u_n (no slip yet) comes first (docs/contact.md, section 6). The second
+        start is the fallback before the caller cuts the step.
+        """
+        predictor = u_old + dt * self.v.x.array + 0.5 * dt**2 * self.a.x.array
+        if self.contact_status is None:
+            return predictor, u_old
+        self.u.x.array[:] = predictor
+        self.contact.update(self.u)
+        old, new = self.contact_status, self.contact.state.status
+        changed = np.count_nonzero((old != new) & (old != Status.OPEN) & (new != Status.OPEN))
+        if self.V.mesh.comm.allreduce(changed, op=MPI.SUM):
+            return u_old, predictor
+        return predictor, u_old
+
     def step(self, dt: float) -> StepResult:
         """Advance by dt [s]; on Newton failure the state is left unchanged."""
         if isinstance(self.damping, ModalDamping):
@@ -216,17 +242,12 @@ class Elastodynamics:
             result = StepResult(converged=self._ksp.getConvergedReason() > 0)
         else:
             self.contact.set_reference(self.u, dt)
-            # initial guess: constant-acceleration (dynamic) or constant-velocity (quasi-static) predictor
-            self.u.x.array[:] += dt * self.v.x.array + 0.5 * dt**2 * self.a.x.array
+            starts = self._initial_guesses(u_old, dt)
+            self.u.x.array[:] = starts[0]
             res = solve_contact_problem(self.A, self._b, self.contact, self.u, self.bcs, solver=self._newton)
             iterations = res.iterations
             if not res.converged:
-                # The predictor extrapolates the slip. Where the TP reverses or stops (stick-slip)
-                # it slides on in the predictor, and with the slip direction fixed the linearised
-                # friction has a negative stiffness along it (about -mu gamma sin(alpha) per unit
-                # area on the cone): Newton leaves by centimetres. Retry from u_n (no slip yet)
-                # before the caller cuts the step (docs/contact.md, section 6).
-                self.u.x.array[:] = u_old
+                self.u.x.array[:] = starts[1]
                 res = solve_contact_problem(self.A, self._b, self.contact, self.u, self.bcs, solver=self._newton)
                 iterations += res.iterations
             result = StepResult(res.converged, iterations, res.residual_norms, res.message)
@@ -234,9 +255,11 @@ class Elastodynamics:
             self.u.x.array[:] = u_old
             return result
         self.u.x.scatter_forward()
+        if self.contact is not None:  # the solver left the contact updated at u_{n+1}
+            self.contact_status = self.contact.state.status.copy()
         v_new, a_new = self.scheme.update(self.u.x.array, u_old, self.v.x.array, self.a.x.array, dt)
         self.v.x.array[:], self.a.x.array[:] = v_new, a_new
-        if self.contact is not None and self.scheme.alpha_f:  # the solver left the contact updated at u_{n+1}
+        if self.contact is not None and self.scheme.alpha_f:
             r = self.contact.residual()
             r.copy(self._r_contact_old)
             r.destroy()

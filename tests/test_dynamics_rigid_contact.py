@@ -44,8 +44,8 @@ def bar_exact(t: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     return u, np.where((t > 1) & (t < 2), 0.5, 0.0)
 
 
-def impacting_bar(n: int, t_end: float = 3.0):
-    """Errors (L2 in time, relative to the L2 norm of the exact history) and energy range."""
+def bar_history(n: int, t_end: float = 3.0) -> dict[str, np.ndarray]:
+    """Time [s], u(0, t) [m], contact pressure [Pa] and energy [J] of the impacting bar with n cells."""
     domain = mesh.create_interval(MPI.COMM_WORLD, n, [0.0, 1.0])
     V = fem.functionspace(domain, ("Lagrange", 1, (1,)))
     material = Material(E=1.0, nu=0.0, rho=1.0)
@@ -64,7 +64,12 @@ def impacting_bar(n: int, t_end: float = 3.0):
         return {"u0_m": end()[0, 0], "pressure_Pa": pressure, "energy_J": sum(p.energy())}
 
     rows = run(problem, t_end, 1.0 / n, observers=[observe], progress=False)  # dt = h (CFL 1)
-    t, u, p, e = (np.array([r[k] for r in rows]) for k in ("time_s", "u0_m", "pressure_Pa", "energy_J"))
+    return {k: np.array([r[k] for r in rows]) for k in ("time_s", "u0_m", "pressure_Pa", "energy_J")}
+
+
+def impacting_bar(n: int, t_end: float = 3.0):
+    """Errors (L2 in time, relative to the L2 norm of the exact history) and energy range."""
+    t, u, p, e = bar_history(n, t_end).values()
     u_ex, p_ex = bar_exact(t)
     error_u = np.sqrt(np.sum((u - u_ex) ** 2) / np.sum(u_ex**2))
     error_p = np.sqrt(np.sum((p - p_ex) ** 2) / np.sum(p_ex**2))
@@ -109,6 +114,7 @@ def den_hartog(m, k, F0, Ff, omega):
 
 M_BLOCK, K_SPRING, F0, MU = 1.0, (2 * np.pi) ** 2, 1.0, 0.3  # kg, N/m (1 Hz), N, -
 F_FRICTION, OMEGA = 0.2, 0.6 * 2 * np.pi  # N, rad/s
+STOPS = 0.6  # friction force [N] with which the block, started at rest, stops once
 
 
 def test_den_hartog_reference_solves_the_ode():
@@ -121,8 +127,16 @@ def test_den_hartog_reference_solves_the_ode():
     assert sol.y[0][-1] == pytest.approx(X0, rel=1e-8) and abs(sol.y[1][-1]) < 1e-8
 
 
-def test_friction_oscillator_matches_den_hartog():
-    X0, phi, x_half = den_hartog(M_BLOCK, K_SPRING, F0, F_FRICTION, OMEGA)
+def friction_oscillator(periods: float = 2.0, friction_force: float = F_FRICTION,
+                        backtracks: int = 0) -> dict[str, np.ndarray]:
+    """Time [s], block displacement x [m] and the number of slipping points per step of the
+    friction oscillator with friction force ``friction_force`` [N], 100 steps per period, started on
+    Den Hartog's orbit (x = -X0, at rest) where that exists, else at rest at x = 0 with phi = 0
+    (``backtracks``: Newton line-search halvings, which the stops need)."""
+    try:
+        X0, phi, _ = den_hartog(M_BLOCK, K_SPRING, F0, friction_force, OMEGA)
+    except ValueError:  # motion with stops
+        X0, phi = 0.0, 0.0
     a = 0.1  # block side [m]; 2D, per unit thickness
     domain = mesh.create_rectangle(MPI.COMM_WORLD, [[0, 0], [a, a]], [2, 2], mesh.CellType.quadrilateral)
     V = fem.functionspace(domain, ("Lagrange", 1, (2,)))
@@ -141,7 +155,7 @@ def test_friction_oscillator_matches_den_hartog():
     top_load = TopFaceLoad(V, tags, 2)
     drive = assemble_vector(fem.form((1.0 / a**2) * w[0] * ufl.dx))  # unit total horizontal force
     drive.ghostUpdate(addv=PETSc.InsertMode.ADD, mode=PETSc.ScatterMode.REVERSE)
-    normal = np.array([0.0, -F_FRICTION / MU, 0.0])
+    normal = np.array([0.0, -friction_force / MU, 0.0])
 
     def load(t, out):
         top_load.add(normal, out)
@@ -152,23 +166,27 @@ def test_friction_oscillator_matches_den_hartog():
                            load=lambda t, out: top_load.add(normal, out), newton_options=NEWTON)
     static.initialise(0.0)
     assert static.step(1.0).converged
-    assert contact.normal_force() == pytest.approx(F_FRICTION / MU, rel=1e-6)
+    assert contact.normal_force() == pytest.approx(friction_force / MU, rel=1e-6)
     problem = Elastodynamics(V, M, K, [], scheme=GeneralisedAlpha.from_spectral_radius(0.5),
-                             contact=contact, load=load, newton_options=NEWTON)
+                             contact=contact, load=load, newton_options=NEWTON | {"max_backtracks": backtracks})
     problem.u.x.array[:] = static.u.x.array
     problem.u.x.array[0::2] -= X0
     problem.initialise(0.0)
     centre = PointProbe(problem.u, [[a / 2, a / 2, 0.0]])
-    statuses = []
 
     def observe(p):
-        statuses.append(contact.state.status.copy())
-        return {"x_m": centre()[0, 0]}
+        slipping = domain.comm.allreduce(int(np.sum(contact.state.status == SLIP)))
+        return {"x_m": centre()[0, 0], "slipping": slipping}
 
     period = 2 * np.pi / OMEGA
-    rows = run(problem, 2 * period, period / 100, observers=[observe], progress=False)
-    t = np.array([r["time_s"] for r in rows])
-    x = np.array([r["x_m"] for r in rows])
+    rows = run(problem, periods * period, period / 100, observers=[observe], progress=False)
+    return {k: np.array([r[k] for r in rows]) for k in ("time_s", "x_m", "slipping")}
+
+
+def test_friction_oscillator_matches_den_hartog():
+    X0, _, x_half = den_hartog(M_BLOCK, K_SPRING, F0, F_FRICTION, OMEGA)
+    period = 2 * np.pi / OMEGA
+    t, x, slipping = friction_oscillator().values()
     second = t > period
     amplitude = 0.5 * (x[second].max() - x[second].min())
     exact = np.where(np.mod(t, period) < period / 2, 1.0, -1.0) * x_half(np.mod(t, period / 2))
@@ -177,6 +195,40 @@ def test_friction_oscillator_matches_den_hartog():
           f"({amplitude / X0 - 1:+.2%}); max history error {history_error:.2%} of X0")
     assert amplitude == pytest.approx(X0, rel=0.03)
     assert history_error < 0.03
-    seen = np.concatenate(statuses) if statuses else np.zeros(0)
-    slipping = domain.comm.allreduce(int(np.sum(seen == SLIP)))
-    assert slipping > 0  # the block slides (and it is not glued by a wrong friction limit)
+    assert slipping.sum() > 0  # the block slides (and it is not glued by a wrong friction limit)
+
+
+def test_newton_starts_from_u_n_where_stick_and_slip_change(monkeypatch):
+    """Each step's Newton solve starts from the predictor unless some point's status there
+    changes between stick and slip against the last step's; then from u_n
+    (``Elastodynamics._initial_guesses``). In the friction oscillator with a stop (friction
+    0.6 F0, started at rest) that happens only around the stop. The start must not change the
+    solution: the history equals that of predictor-first starts to the Newton tolerance."""
+    original = Elastodynamics._initial_guesses
+    starts = []
+
+    def spy(self, u_old, dt):
+        guesses = original(self, u_old, dt)
+        starts.append((self.t + dt, guesses[0] is u_old))
+        return guesses
+
+    monkeypatch.setattr(Elastodynamics, "_initial_guesses", spy)
+    chosen = friction_oscillator(periods=2.0, friction_force=STOPS, backtracks=4)
+    t_u_n = np.array([t for t, first in starts if first])
+    sticking = chosen["time_s"][chosen["slipping"] == 0]
+    period = 2 * np.pi / OMEGA
+    print(f"\nu_n first at t / period = {np.round(t_u_n / period, 3)}; sticking steps at "
+          f"{np.round(sticking / period, 3)}")
+    assert sticking.size > 0 and t_u_n.size > 0
+    # u_n starts only around the stop (the points' slip restarts over a few steps), none while
+    # the block slides on
+    assert all(np.min(np.abs(sticking - t)) <= 0.05 * period for t in t_u_n)
+    assert t_u_n.size <= 0.1 * chosen["time_s"].size
+
+    def predictor_first(self, u_old, dt):
+        return u_old + dt * self.v.x.array + 0.5 * dt**2 * self.a.x.array, u_old
+
+    monkeypatch.setattr(Elastodynamics, "_initial_guesses", predictor_first)
+    reference = friction_oscillator(periods=2.0, friction_force=STOPS, backtracks=4)
+    assert np.array_equal(chosen["time_s"], reference["time_s"])
+    assert np.max(np.abs(chosen["x_m"] - reference["x_m"])) < 1e-7 * np.max(np.abs(reference["x_m"]))
