@@ -94,6 +94,8 @@ def main(argv=None) -> int:
     p.add_argument("--zeta-frequency", type=float, default=120.0, help="[Hz]")
     p.add_argument("--lagged-friction", action="store_true", help="mu from the previous step's slip speed")
     p.add_argument("--backtracks", type=int, default=4, help="Newton step halvings when ||F|| grows")
+    p.add_argument("--no-reversal-limit", action="store_true",
+                   help="Newton steps may reverse a slipping point's friction (solver.nonlinear)")
     p.add_argument("--stall-iterations", type=int, default=None,
                    help="give up a Newton attempt when its smallest ||F|| is this many iterations old "
                         "(default: solver.nonlinear's)")
@@ -137,7 +139,7 @@ def main(argv=None) -> int:
                              damping=RayleighDamping.at_frequency(a.zeta, a.zeta_frequency), contact=contact,
                              newton_options={"max_backtracks": a.backtracks, "refactor_after": a.refactor_after,
                                              "max_gap_change": a.max_gap_change, "krylov_rtol": a.krylov_rtol,
-                                             "lu_solver": a.lu_solver}
+                                             "lu_solver": a.lu_solver, "limit_reversal": not a.no_reversal_limit}
                              | ({} if a.forcing_max is None else {"forcing_max": a.forcing_max})
                              | ({} if a.newton_rtol is None else {"rtol": a.newton_rtol})
                              | ({} if a.stall_iterations is None else {"stall_iterations": a.stall_iterations}))

@@ -178,10 +178,12 @@ class NitscheContact:
         )
         self._u_old_slave = self.slave.displacement(u_old)
         self._u_old_master = self.master.displacement(u_old)
+        self._updated_at = None
 
     def update(self, u: dolfinx.fem.Function) -> None:
         """Pair the slave points with the deformed master surface and evaluate the contact state at u."""
         u.x.scatter_forward()
+        self._updated_at = u.x.array.copy()
         slave, gdim = self.slave, self.slave.gdim
         self._u_slave_nodes = u.x.array.reshape(-1, gdim)[slave.dofs]
         u_s = np.einsum("pn,pni->pi", slave.values, self._u_slave_nodes)
@@ -243,6 +245,29 @@ class NitscheContact:
             weights=slave.weights,
             normal=n,
         )
+
+    def slip_directions(self) -> tuple[npt.NDArray, npt.NDArray]:
+        """The slipping points at the last update and their trial tangential tractions P_t [Pa]
+        (this rank's points; the reference of ``reversal_limit``)."""
+        return self._slip.copy(), self._P_t.copy()
+
+    def reversal_limit(self, slipping: npt.NDArray, P_t0: npt.NDArray) -> float:
+        """Largest fraction (<= 1, this rank) of the step from the iterate of ``slip_directions``
+        (``slipping``, ``P_t0``) to the last update before a point that slipped there slips the
+        other way at the last update: P_t . q0 = 0 with q0 = P_t0 / |P_t0|, P_t linear along the
+        step. Points that come to stick (inside the friction disk) do not limit the step."""
+        along = np.einsum("pi,pi->p", self._P_t, P_t0)
+        start = np.einsum("pi,pi->p", P_t0, P_t0)
+        radius = self._mu * -self._lam_n * np.sqrt(start)
+        reversing = slipping & self._slip & (along < -radius)
+        if not reversing.any():
+            return 1.0
+        return float((start[reversing] / (start[reversing] - along[reversing])).min())
+
+    def updated_at(self, u: dolfinx.fem.Function) -> bool:
+        """Whether the last ``update`` since ``set_reference`` was at u's present values (all ranks)."""
+        same = self._updated_at is not None and np.array_equal(self._updated_at, u.x.array)
+        return self.V.mesh.comm.allreduce(same, op=MPI.LAND)
 
     # -- per-point operators -------------------------------------------------------------
     def _traction(self, idx: npt.NDArray) -> npt.NDArray:

@@ -103,6 +103,13 @@ class ContactNewtonSolver:
             most max_gap_change per iteration (separation is not limited). Stops the open <->
             deeply penetrated cycling of a body that first flies free (docs/contact.md).
             None: full Newton steps.
+        limit_reversal: with backtracking, when the (gap-limited) Newton step does not lower
+            ||F||, first try the step shortened to where the first slipping point's trial
+            friction traction would turn against its direction at the iterate
+            (``NitscheContact.reversal_limit``; contact objects without it: no effect), then
+            halve from there. The slip tangent has no stiffness along the slip direction, so
+            where the TP stops the Newton step slides it on until the friction reverses, and
+            halving only approaches the stop linearly (docs/contact.md, section 6).
     """
 
     def __init__(
@@ -120,6 +127,7 @@ class ContactNewtonSolver:
         lu_solver: str = "mumps",
         max_backtracks: int = 0,
         max_gap_change: float | None = None,
+        limit_reversal: bool = True,
     ):
         if max_iterations < 1:
             raise ValueError(f"max_iterations must be >= 1, got {max_iterations}")
@@ -138,6 +146,7 @@ class ContactNewtonSolver:
         self.stall_iterations = stall_iterations
         self.refactor_after = refactor_after
         self.max_backtracks = max_backtracks
+        self.limit_reversal = limit_reversal
         if max_gap_change is not None and not max_gap_change > 0:
             raise ValueError(f"max_gap_change must be positive [m] (or None), got {max_gap_change}")
         self.max_gap_change = max_gap_change
@@ -243,10 +252,13 @@ class ContactNewtonSolver:
             raise RuntimeError(f"linear solve failed (KSP reason {reason})")
         return its
 
-    def _residual(self, b: PETSc.Vec, contact: NitscheContact, u: dolfinx.fem.Function, F: PETSc.Vec, timings: dict) -> float:
-        """F = A u - b + r_c(u) (contact updated at u, zero on Dirichlet rows); returns ||F||."""
+    def _residual(self, b: PETSc.Vec, contact: NitscheContact, u: dolfinx.fem.Function, F: PETSc.Vec, timings: dict,
+                  update: bool = True) -> float:
+        """F = A u - b + r_c(u) (contact updated at u unless ``update`` is False, zero on Dirichlet
+        rows); returns ||F||."""
         t0 = time.perf_counter()
-        contact.update(u)
+        if update:
+            contact.update(u)
         t1 = time.perf_counter()
         rc = contact.residual()
         with rc.localForm() as loc:
@@ -259,38 +271,49 @@ class ContactNewtonSolver:
         timings["contact assembly"] += time.perf_counter() - t1
         return F.norm()
 
-    def _line_search(self, b, contact, u, x0, du, F, norm: float, timings: dict) -> float:
-        """Take the Newton step, halving it (up to ``max_backtracks`` times) while ||F|| grows.
-
-        Generalized Newton on stick/slip/open switches can cycle (e.g. with velocity-weakening
-        friction); backtracking breaks such cycles. If no trial step lowers ||F||, the one with
-        the smallest ||F|| is kept. Leaves u, F and the contact state at the accepted point.
-        """
+    def _trial(self, b, contact, u, x0, du, alpha: float, F, timings: dict) -> float:
+        """Move to u = x0 + alpha du; returns ||F|| there (contact updated at u)."""
         x = u.x.petsc_vec
-        x.copy(x0)
-        best = (np.inf, 1.0)
-        alpha = 1.0
-        if self.max_gap_change is not None:
-            gap = contact.state.gap.copy()
-            x.axpy(1.0, du)
-            u.x.scatter_forward()
-            trial = self._residual(b, contact, u, F, timings)
-            alpha = self._gap_limited_step(gap, contact.state.gap)
-            if alpha == 1.0 and (trial < norm or not self.max_backtracks):
-                return trial
-        for _ in range(self.max_backtracks + 1):
-            x0.copy(x)
-            x.axpy(alpha, du)
-            u.x.scatter_forward()
-            trial = self._residual(b, contact, u, F, timings)
-            if trial < norm or not self.max_backtracks:
-                return trial
-            best = min(best, (trial, alpha))
-            alpha *= 0.5
         x0.copy(x)
-        x.axpy(best[1], du)
+        x.axpy(alpha, du)
         u.x.scatter_forward()
         return self._residual(b, contact, u, F, timings)
+
+    def _newton_step(self, b, contact, u, x0, du, F, norm: float, timings: dict) -> tuple[float, float]:
+        """Save u in x0 and take the Newton step, shortened by the gap limit; if that does not lower
+        ||F|| (= norm at x0) and some slipping point's friction would reverse on the way, shortened
+        to where the first one would. Returns (alpha, ||F||) of the step taken."""
+        u.x.petsc_vec.copy(x0)
+        gap = contact.state.gap.copy() if self.max_gap_change is not None else None
+        slip = (contact.slip_directions() if self.limit_reversal and self.max_backtracks
+                and hasattr(contact, "slip_directions") else None)
+        trial = self._trial(b, contact, u, x0, du, 1.0, F, timings)
+        alpha = 1.0 if gap is None else self._gap_limited_step(gap, contact.state.gap)
+        reversal = 1.0 if slip is None else self._comm.allreduce(contact.reversal_limit(*slip), op=MPI.MIN)
+        if alpha < 1.0:
+            trial = self._trial(b, contact, u, x0, du, alpha, F, timings)
+        if trial >= norm and reversal < alpha:
+            alpha = reversal
+            trial = self._trial(b, contact, u, x0, du, alpha, F, timings)
+        return alpha, trial
+
+    def _backtrack(self, b, contact, u, x0, du, F, norm: float, alpha: float, trial: float, timings: dict) -> float:
+        """From the step x0 + alpha du (||F|| = trial there), halve the step (up to ``max_backtracks``
+        times) while ||F|| >= norm. Generalized Newton on stick/slip/open switches can cycle (e.g.
+        with velocity-weakening friction); backtracking breaks such cycles. If no trial step
+        lowers ||F||, the one with the smallest ||F|| is kept. Leaves u, F and the contact state
+        at the accepted point; returns its ||F||.
+        """
+        best = (trial, alpha)
+        for _ in range(self.max_backtracks):
+            if trial < norm:
+                return trial
+            alpha *= 0.5
+            trial = self._trial(b, contact, u, x0, du, alpha, F, timings)
+            best = min(best, (trial, alpha))
+        if trial < norm or best[1] == alpha:
+            return trial
+        return self._trial(b, contact, u, x0, du, best[1], F, timings)
 
     def _gap_limited_step(self, gap: np.ndarray, trial_gap: np.ndarray) -> float:
         """Largest fraction (<= 1, the same on all ranks) of the step keeping each point's approach
@@ -317,7 +340,9 @@ class ContactNewtonSolver:
         result = None
         step_small = False
         eta = self.forcing_max
-        norm = self._residual(b, contact, u, F, timings)
+        # e.g. a time step's predictor, where the caller evaluated the contact status
+        current = getattr(contact, "updated_at", None)
+        norm = self._residual(b, contact, u, F, timings, update=not (current is not None and current(u)))
         for k in range(self.max_iterations + 1):
             norms.append(norm)
             if not np.isfinite(norm):
@@ -347,7 +372,8 @@ class ContactNewtonSolver:
                 break
             finally:
                 J.destroy()
-            norm = self._line_search(b, contact, u, x0, du, F, norm, timings)
+            alpha, trial = self._newton_step(b, contact, u, x0, du, F, norm, timings)
+            norm = self._backtrack(b, contact, u, x0, du, F, norm, alpha, trial, timings)
             step_small = du.norm(PETSc.NormType.INFINITY) <= self.stol * x.norm(PETSc.NormType.INFINITY)
         for vec in (F, du, x0):
             vec.destroy()

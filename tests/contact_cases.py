@@ -178,11 +178,13 @@ def sliding_block(
     lagged: bool = False,
     rigid_base: bool = False,
     contact_type=None,
+    drags=None,
     **newton,
 ):
     """Block (0.5 x 0.5 x 0.25 m) pressed on a clamped base by q = 1 MPa and dragged by its top face.
 
-    The top face's x displacement grows by ``slide_per_step`` [m] per step (u_y = 0 there),
+    The top face's x displacement grows by ``slide_per_step`` [m] per step (u_y = 0 there), or
+    takes the values ``drags`` [m] (one per step; ``steps`` and ``slide_per_step`` unused),
     the rest of the top face is loaded by the pressure. The base is clamped on its bottom
     face, or with ``rigid_base`` at all its dofs (its top face, the master surface, then
     cannot move or rotate). ``contact_type`` (default NitscheContact) lets a test use a
@@ -224,8 +226,7 @@ def sliding_block(
     solver = ContactNewtonSolver(A, bcs, **({"max_iterations": 40, "refactor_after": 0} | newton))
     N = q * 0.5 * 0.5
     history, results = [], []
-    for k in range(1, steps + 1):
-        drag.value = k * slide_per_step
+    for drag.value in (slide_per_step * np.arange(1, steps + 1) if drags is None else drags):
         b = dolfinx.fem.petsc.assemble_vector(L)
         dolfinx.fem.petsc.apply_lifting(b, [a], [bcs])
         b.ghostUpdate(PETSc.InsertMode.ADD, PETSc.ScatterMode.REVERSE)

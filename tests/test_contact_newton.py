@@ -252,3 +252,67 @@ def test_distributed_newton_follows_the_serial_one():
         k = int(np.argmax(a < 1e-7 * a[0])) if np.any(a < 1e-7 * a[0]) else len(a)  # iterates above round-off
         assert len(b) >= k, (a, b)  # (round-off is at 1e-14 - 1e-13 of F_0)
         assert np.allclose(b[:k], a[:k], rtol=1e-8, atol=0.0), (a, b)
+
+
+def test_reversal_limit_stops_where_the_friction_would_reverse(sliding_state):
+    """Dragging the slipping block back by a rigid translation: the trial traction P_t is then
+    affine along the step (flat base, no strain change), P_t(alpha) = P_t0 + alpha gamma d e_x,
+    so the fraction at which a slipping point's P_t . q0 vanishes is |P_t0| / (-gamma d e_x . q0),
+    and the step limit is the smallest such fraction over the points that slip the other way at
+    the full step."""
+    contact, u, _ = sliding_state
+    V = u.function_space
+    mesh = V.mesh
+    comm = mesh.comm
+    cells = np.arange(mesh.topology.index_map(3).size_local + mesh.topology.index_map(3).num_ghosts, dtype=np.int32)
+    block = cells[dolfinx.mesh.compute_midpoints(mesh, 3, cells)[:, 2] > 0]
+    on_block = np.zeros(u.x.array.size // 3, dtype=bool)
+    on_block[V.dofmap.list[block].ravel()] = True
+    state = u.copy()
+    state.x.array.reshape(-1, 3)[~on_block] = 0.0  # flat base
+    reference = state.copy()
+    reference.x.array.reshape(-1, 3)[on_block, 0] -= 2e-4
+    contact.set_reference(reference, 1.0)
+    contact.update(state)
+    slipping, P_t0 = contact.slip_directions()
+    assert comm.allreduce(int(slipping.sum()), op=MPI.SUM) > 0
+    d = 3e-4  # [m]: back beyond the step's start (the last step slid 2e-4 m), against the friction
+    back = state.copy()
+    back.x.array.reshape(-1, 3)[on_block, 0] -= d
+    contact.update(back)
+    limit = comm.allreduce(contact.reversal_limit(slipping, P_t0), op=MPI.MIN)
+    size = np.linalg.norm(P_t0, axis=1)
+    rate = contact.gamma * d * P_t0[:, 0] / np.where(size > 0, size, 1.0)  # d(P_t . q0) / d alpha [Pa]
+    mu = contact.friction.coefficient(np.linalg.norm(contact.state.slip_velocity, axis=1))
+    reversing = slipping & (size + rate < -mu * contact.state.pressure)
+    assert comm.allreduce(int(reversing.sum()), op=MPI.SUM) > 0
+    expected = comm.allreduce(float((size[reversing] / -rate[reversing]).min(initial=np.inf)), op=MPI.MIN)
+    assert 0.0 < expected < 1.0
+    assert limit == pytest.approx(expected, rel=1e-9)
+    # a step that goes no further than that reverses nothing
+    contact.update(state)
+    half = state.copy()
+    half.x.array.reshape(-1, 3)[on_block, 0] -= 0.5 * expected * d
+    contact.update(half)
+    assert comm.allreduce(contact.reversal_limit(slipping, P_t0), op=MPI.MIN) == 1.0
+
+
+def test_reversal_limit_changes_the_path_not_the_solution():
+    """Dragging the block forth and back (its friction reverses twice) with backtracking Newton:
+    with and without the reversal limit every step converges, to the same displacements and
+    friction forces (to the Newton tolerance); only the iterations differ."""
+    friction = FrictionLaw(mu_s=0.5, mu_d=0.4, d_c=100.0)
+    drags = [2e-4, 4e-4, 6e-4, 5e-4, 4e-4, 3e-4, 4e-4, 5e-4]  # top face x displacement per step [m]
+    comm = MPI.COMM_WORLD
+    runs = [sliding_block(comm, friction, steps=0, slide_per_step=0.0, dt=0.02, drags=drags, rtol=1e-10,
+                          max_backtracks=4, limit_reversal=limit) for limit in (True, False)]
+    (history, _, results, u), (history_free, _, results_free, u_free) = runs
+    assert all(r.converged for r in results + results_free)
+    assert [r.iterations for r in results] != [r.iterations for r in results_free]  # the limit acted
+    difference = np.sqrt(comm.allreduce(float(np.sum((u.x.array - u_free.x.array) ** 2)), op=MPI.SUM))
+    size = np.sqrt(comm.allreduce(float(np.sum(u_free.x.array ** 2)), op=MPI.SUM))
+    print(f"\nreversal limit: Newton iterations {[r.iterations for r in results]} against "
+          f"{[r.iterations for r in results_free]}; displacement difference {difference / size:.1e} relative")
+    assert difference < 1e-8 * size
+    assert np.allclose(history, history_free, rtol=1e-8, atol=1e-10)
+    assert np.min(np.diff(history[:, 0])) < 0 < np.max(np.diff(history[:, 0]))  # the friction force reversed
