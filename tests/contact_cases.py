@@ -226,7 +226,8 @@ def sliding_block(
     solver = ContactNewtonSolver(A, bcs, **({"max_iterations": 40, "refactor_after": 0} | newton))
     N = q * 0.5 * 0.5
     history, results = [], []
-    for drag.value in (slide_per_step * np.arange(1, steps + 1) if drags is None else drags):
+    for value in slide_per_step * np.arange(1, steps + 1) if drags is None else drags:
+        drag.value = value
         b = dolfinx.fem.petsc.assemble_vector(L)
         dolfinx.fem.petsc.apply_lifting(b, [a], [bcs])
         b.ghostUpdate(PETSc.InsertMode.ADD, PETSc.ScatterMode.REVERSE)
