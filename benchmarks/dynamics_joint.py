@@ -41,7 +41,7 @@ from solver import checkpoint  # noqa: E402
 from solver.case import resolve_case_path  # noqa: E402
 from solver.contact import NitscheContact  # noqa: E402
 from solver.damping import RayleighDamping  # noqa: E402
-from solver.dynamics import Elastodynamics, Settlement, assemble_structure, run  # noqa: E402
+from solver.dynamics import ContactZoneGuard, Elastodynamics, Settlement, assemble_structure, run  # noqa: E402
 from solver.friction import FrictionLaw  # noqa: E402
 from solver.loads import RampedAxialForce, Schedule, Stage, TopFaceLoad, TPLoading  # noqa: E402
 from solver.modal import clamp  # noqa: E402
@@ -73,6 +73,8 @@ def main(argv=None) -> int:
     p.add_argument("--n-circumferential", type=int, default=48)
     p.add_argument("--axial-size", type=float, default=0.08, help="[m]")
     p.add_argument("--contact-axial-size", type=float, default=0.01, help="axial size in the contact zone [m]")
+    p.add_argument("--contact-zone-above", type=float, default=MeshOptions.contact_zone_above,
+                   help="contact zone (and contact surfaces) up to this height above the TP's lower edge [m]")
     p.add_argument("--degree", type=int, default=2)
     p.add_argument("--partition", choices=("sectors", "graph"), default="sectors",
                    help="parallel distribution of the cells (geometry.parameters.MeshOptions)")
@@ -122,7 +124,8 @@ def main(argv=None) -> int:
 
     joint, material, _ = load_geometry(resolve_case_path(a.case))
     options = MeshOptions(n_circumferential=a.n_circumferential, axial_size=a.axial_size,
-                          contact_axial_size=a.contact_axial_size, partition=a.partition)
+                          contact_axial_size=a.contact_axial_size, contact_zone_above=a.contact_zone_above,
+                          partition=a.partition)
     t0 = time.perf_counter()
     data = create_joint_mesh(comm, joint, options)
     V = fem.functionspace(data.mesh, ("Lagrange", a.degree, (3,)))
@@ -166,11 +169,14 @@ def main(argv=None) -> int:
         checkpoint.restore(a.ramp_checkpoint, problem)
         say(f"self-weight stage skipped: state at t = {problem.t:.6g} s from {a.ramp_checkpoint}")
         stages = stages[1:]
+    observers = [settlement]
+    if a.contact_axial_size > 0:
+        observers.append(ContactZoneGuard(contact, a.contact_axial_size, a.contact_zone_above))
     timer = PhaseTimer().install()
     for name, t_end, dt in stages:
         timer.reset()
         t0, cpu0 = time.perf_counter(), time.process_time()
-        rows = run(problem, t_end, dt, observers=[settlement, StepLog(timer, say)], csv_path=out / f"{name}.csv",
+        rows = run(problem, t_end, dt, observers=[*observers, StepLog(timer, say)], csv_path=out / f"{name}.csv",
                    progress=False)
         if name == "self-weight" and a.ramp_checkpoint:
             checkpoint.save(a.ramp_checkpoint, problem, {"stage": name})

@@ -49,8 +49,8 @@ class _PartEntities:
     top: list[int]  #: annulus at the upper end
     outer: list[int]  #: outer lateral surfaces, per segment (bottom to top), concatenated
     inner: list[int]
-    outer_cone: list[int]
-    inner_cone: list[int]
+    outer_contact: list[int]  #: outer cone surface (inside the contact zone if there is one)
+    inner_contact: list[int]
 
 
 def _add_part(
@@ -62,7 +62,8 @@ def _add_part(
     geometric surface of revolution and second-order nodes land on exact circles
     also inside the wall (a single surface split into layers would leave the
     interior mid-edge nodes on chords). ``zone`` = (z_low, z_high) [m, global]: the
-    part of the cone inside is meshed with ``options.contact_axial_size``.
+    part of the cone inside is meshed with ``options.contact_axial_size`` and is the
+    contact surface (``outer_contact``, ``inner_contact``); without a zone, the whole cone.
     """
     geo = gmsh.model.geo
     heights = list(part.profile_heights())
@@ -88,7 +89,7 @@ def _add_part(
     for line in (line for layer in radial for line in layer):
         geo.mesh.setTransfiniteCurve(line, 2)
 
-    profile, is_cone, layer_of = [], [], []
+    profile, is_contact, layer_of = [], [], []
     for k in range(len(heights) - 1):
         mid = 0.5 * (heights[k] + heights[k + 1])
         in_zone = (
@@ -106,7 +107,7 @@ def _add_part(
             geo.mesh.setTransfiniteSurface(surface)
             geo.mesh.setRecombine(2, surface)
             profile.append(surface)
-            is_cone.append(part.cone_bottom_z <= mid <= part.cone_top_z)
+            is_contact.append(in_zone if zone is not None else part.cone_bottom_z <= mid <= part.cone_top_z)
             layer_of.append((j, k))
 
     entities = _PartEntities([], [], [], [], [], [], [])
@@ -133,12 +134,12 @@ def _add_part(
             entities.volumes.append(vol[1])
             if j == n_layers - 1:
                 entities.outer.append(lat_outer[1])
-                if is_cone[i]:
-                    entities.outer_cone.append(lat_outer[1])
+                if is_contact[i]:
+                    entities.outer_contact.append(lat_outer[1])
             if j == 0:
                 entities.inner.append(lat_inner[1])
-                if is_cone[i]:
-                    entities.inner_cone.append(lat_inner[1])
+                if is_contact[i]:
+                    entities.inner_contact.append(lat_inner[1])
             if k == 0:
                 entities.bottom.append(lat_bottom[1])
             if k == last_segment:
@@ -206,8 +207,8 @@ def build_joint_model(
         tags.TP_VOLUME: (3, tp.volumes),
         tags.MP_CLAMPED: (2, mp.bottom),
         tags.TP_TOP: (2, tp.top),
-        tags.MP_CONTACT: (2, mp.outer_cone),
-        tags.TP_CONTACT: (2, tp.inner_cone),
+        tags.MP_CONTACT: (2, mp.outer_contact),
+        tags.TP_CONTACT: (2, tp.inner_contact),
     }
     for tag, (dim, entities) in groups.items():
         gmsh.model.addPhysicalGroup(dim, entities, tag, name=tags.JOINT_NAMES[tag])

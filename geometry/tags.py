@@ -4,7 +4,8 @@ Joint model (MP and TP as two disjoint volumes in one mesh):
 
 * cells: ``MP_VOLUME``, ``TP_VOLUME``
 * facets: ``MP_CLAMPED`` (MP bottom annulus), ``TP_TOP`` (TP top annulus, loaded),
-  ``MP_CONTACT`` (MP outer cone surface), ``TP_CONTACT`` (TP inner cone surface).
+  ``MP_CONTACT`` (MP outer cone surface), ``TP_CONTACT`` (TP inner cone surface); with a
+  contact zone (``MeshOptions.contact_axial_size`` > 0) only their parts inside the zone.
 
 Single tube (``create_tube_mesh``): ``VOLUME``; ``BOTTOM`` and ``TOP`` annuli,
 ``OUTER`` and ``INNER`` lateral surfaces over the whole length (cone and straight

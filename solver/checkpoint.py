@@ -114,10 +114,12 @@ def restore(folder: str | Path, problem) -> dict[str, Any]:
         data[k].shape == f.x.array.shape
         for k, f in (("u", problem.u), ("v", problem.v), ("a", problem.a))
     )
+    if problem.contact is not None:  # the same slave points (contact surfaces)
+        ok = ok and data["paired_facet"].shape == problem.contact.pairing.facet.shape
     if comm.allreduce(not ok, op=MPI.LOR):
         raise ValueError(
             f"checkpoint {folder} does not match this discretisation "
-            "(different mesh or degree than when it was written)"
+            "(different mesh, contact surfaces or degree than when it was written)"
         )
     for key, f in (("u", problem.u), ("v", problem.v), ("a", problem.a)):
         f.x.array[:] = data[key]

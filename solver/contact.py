@@ -477,6 +477,16 @@ class NitscheContact:
         z_min = self.V.mesh.comm.allreduce(z.min() if len(z) else np.inf, op=MPI.MIN)
         return np.where(z <= z_min + height, Status.STICK, Status.OPEN).astype(np.int8)
 
+    def touches_top(self, margin: float, axis: int = 2) -> bool:
+        """Whether a slave point within ``margin`` [m] of the slave surface's highest point along
+        ``axis`` (reference coordinates) is in contact, on any rank: the contact band has reached
+        the upper end of the surface, above which no contact is modelled."""
+        z = self.slave.points[:, axis]
+        comm = self.V.mesh.comm
+        z_max = comm.allreduce(z.max() if len(z) else -np.inf, op=MPI.MAX)
+        touching = (z >= z_max - margin) & (self.state.status != Status.OPEN)
+        return comm.allreduce(bool(touching.any()), op=MPI.LOR)
+
     def residual_floor(self) -> float:
         """Round-off level of the contact residual's l2 norm at the last update [N] (all ranks).
 

@@ -333,6 +333,24 @@ class Settlement:
         return {"settlement_mm": 1e3 * float(s)}
 
 
+class ContactZoneGuard:
+    """Observer for ``run`` that stops the run (RuntimeError) when the contact band reaches the
+    upper ``margin`` [m] of the slave surface (``NitscheContact.touches_top``): with a contact
+    zone (``MeshOptions.contact_axial_size`` > 0) the contact surfaces end at its top, and
+    contact beyond it would be missed. ``margin``: the zone's element height."""
+
+    def __init__(self, contact, margin: float, zone_above: float):
+        self.contact, self.margin, self.zone_above = contact, margin, zone_above
+
+    def __call__(self, problem: Elastodynamics) -> dict[str, float]:
+        if self.contact.touches_top(self.margin):
+            raise RuntimeError(
+                f"at t = {problem.t:.6g} s the contact band reached the top of the contact zone "
+                f"({self.zone_above} m above the TP's lower edge), where the contact surfaces end: "
+                "rerun with a larger mesh.contact_zone_above")
+        return {}
+
+
 def run(problem: Elastodynamics, t_end: float, dt: float, dt_min: float | None = None,
         observers: Sequence[Observer] = (), csv_path: str | pathlib.Path | None = None,
         progress: bool = True, growth_after: int = 4) -> list[dict[str, float]]:

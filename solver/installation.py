@@ -48,7 +48,7 @@ from solver import checkpoint, report
 from solver.case import construct
 from solver.contact import NitscheContact, Status
 from solver.damping import ModalDamping, RayleighDamping
-from solver.dynamics import Elastodynamics, Settlement, StepResult, assemble_structure, run
+from solver.dynamics import ContactZoneGuard, Elastodynamics, Settlement, StepResult, assemble_structure, run
 from solver.elasticity import Material
 from solver.friction import FrictionLaw
 from solver.loads import (
@@ -968,7 +968,10 @@ class Installation:
         problem = model.problem
         steps = self.case.output.checkpoint_every
         n_chunks = max(1, math.ceil((plan.end_s - plan.start_s) / (steps * plan.dt_s) - 1e-9))
-        observer = self._observer(index, plan, writer, bar)
+        observers = [self._observer(index, plan, writer, bar)]
+        mesh = self.case.mesh
+        if mesh.contact_axial_size > 0:
+            observers.append(ContactZoneGuard(model.contact, mesh.contact_axial_size, mesh.contact_zone_above))
         wall0 = time.perf_counter()
         rows0 = len(self.history)
         for chunk in range(first_chunk, n_chunks):
@@ -981,7 +984,7 @@ class Installation:
                     t_end,
                     plan.dt_s,
                     dt_min=plan.dt_s * self.case.time.dt_min_fraction,
-                    observers=[observer],
+                    observers=observers,
                     progress=False,
                 )
             if chunk < n_chunks - 1:

@@ -51,3 +51,26 @@ def test_distributed_equals_serial():
     distributed, *_ = sliding_block(MPI.COMM_WORLD, friction, steps=4, slide_per_step=2e-4, dt=1.0)
     serial, *_ = sliding_block(MPI.COMM_SELF, friction, steps=4, slide_per_step=2e-4, dt=1.0)
     assert np.allclose(distributed, serial, rtol=1e-8, atol=1e-10)
+
+
+def test_contact_at_the_top_of_the_slave_surface_is_detected():
+    """touches_top: the pressed block touches within the margin of the slave surface's highest
+    point (along x here), and ContactZoneGuard then stops a run; lifted off (all open) neither."""
+    from types import SimpleNamespace
+
+    import dolfinx
+
+    from solver.dynamics import ContactZoneGuard
+
+    _, contact, results, u = sliding_block(MPI.COMM_WORLD, FrictionLaw(mu_s=0.3, mu_d=0.3, d_c=0.0),
+                                           steps=1, slide_per_step=0.0, dt=None)
+    assert results[0].converged
+    guard = ContactZoneGuard(contact, margin=0.05, zone_above=0.15)
+    assert contact.touches_top(0.05, axis=0)
+    with pytest.raises(RuntimeError, match="contact_zone_above"):
+        guard(SimpleNamespace(t=1.0))
+    lifted = dolfinx.fem.Function(u.function_space)
+    lifted.x.array[:] = -u.x.array  # the block lifted off the base as far as it was pressed in
+    contact.update(lifted)
+    assert not contact.touches_top(0.05, axis=0)
+    assert guard(SimpleNamespace(t=1.0)) == {}

@@ -261,9 +261,10 @@ def test_full_scale_mesh():
 
 def test_contact_zone_refinement(scaled):
     """contact_axial_size: the cone walls within the zone around the TP's lower edge get
-    elements of at most that axial size (both parts), the rest keeps axial_size; the walls'
-    generators are straight, so volumes and contact areas equal the unrefined mesh's (to the
-    quadrature error of the curved cells, 4e-8)."""
+    elements of at most that axial size (both parts) and are the contact surfaces; the walls
+    outside keep axial_size. The generators are straight, so the volumes equal the unrefined
+    mesh's (to the quadrature error of the curved cells, 4e-8) and the contact areas the exact
+    frustum areas of the zone (curved cells, 8 around)."""
     size, below, above = 0.01, 0.03, 0.15
     options = MeshOptions(
         n_circumferential=8,
@@ -274,23 +275,33 @@ def test_contact_zone_refinement(scaled):
     )
     md = create_joint_mesh(COMM, scaled, options)
     coarse = create_joint_mesh(COMM, scaled, MeshOptions(n_circumferential=8, axial_size=0.25))
-    for measure, tag in (("dx", tags.MP_VOLUME), ("dx", tags.TP_VOLUME),
-                         ("ds", tags.MP_CONTACT), ("ds", tags.TP_CONTACT)):
-        assert integrate(md, measure, tag) == pytest.approx(integrate(coarse, measure, tag), rel=1e-6)
-    # axial extent of each contact facet
-    mesh = md.mesh
+    for tag in (tags.MP_VOLUME, tags.TP_VOLUME):
+        assert integrate(md, "dx", tag) == pytest.approx(integrate(coarse, "dx", tag), rel=1e-6)
     z_edge = scaled.tp_offset
-    for tag in (tags.MP_CONTACT, tags.TP_CONTACT):
-        facets = md.facet_tags.find(tag)
-        facets = facets[facets < mesh.topology.index_map(2).size_local]
-        nodes = dolfinx.mesh.entities_to_geometry(mesh, 2, facets)
-        z = mesh.geometry.x[nodes[:, :4]][:, :, 2]  # the corners (higher-order nodes follow)
-        height, mid = z.max(axis=1) - z.min(axis=1), 0.5 * (z.max(axis=1) + z.min(axis=1))
-        inside = (mid > z_edge - below) & (mid < z_edge + above)
-        fine = COMM.allreduce(int(np.count_nonzero(inside)))
-        assert fine >= 8 * (above / size if tag == tags.TP_CONTACT else (above + below) / size) - 8
-        assert np.all(height[inside] <= size * (1 + 1e-9))
-        assert np.all(height[~inside] > size)
+
+    def frustum(r1: float, r2: float, length: float) -> float:
+        return math.pi * (r1 + r2) * math.hypot(length, r2 - r1)
+
+    mp, tp = scaled.mp, scaled.tp
+    areas = {tags.MP_CONTACT: frustum(mp.outer_radius(z_edge - below), mp.outer_radius(z_edge + above), below + above),
+             tags.TP_CONTACT: frustum(tp.inner_radius(0.0), tp.inner_radius(above), above)}
+    for tag, area in areas.items():
+        assert integrate(md, "ds", tag) == pytest.approx(area, rel=1e-3)
+    mesh = md.mesh
+
+    def extents(dim: int, entities):
+        """Axial height and mid-height of owned entities [m] (their corner nodes)."""
+        entities = entities[entities < mesh.topology.index_map(dim).size_local]
+        z = mesh.geometry.x[dolfinx.mesh.entities_to_geometry(mesh, dim, entities)[:, : 2**dim]][:, :, 2]
+        return z.max(axis=1) - z.min(axis=1), 0.5 * (z.max(axis=1) + z.min(axis=1))
+
+    for tag, low in ((tags.MP_CONTACT, z_edge - below), (tags.TP_CONTACT, z_edge)):
+        height, mid = extents(2, md.facet_tags.find(tag))
+        assert np.all((mid > low) & (mid < z_edge + above))
+        assert np.all(height <= size * (1 + 1e-9))
+        assert COMM.allreduce(len(mid)) == 8 * round((z_edge + above - low) / size)
+    height, mid = extents(3, md.cell_tags.find(tags.TP_VOLUME))
+    assert np.all(height[mid > z_edge + above] > size)
     assert owned_count(md, 3, tags.TP_VOLUME) > owned_count(coarse, 3, tags.TP_VOLUME) + 8 * 10
 
 
