@@ -6,7 +6,9 @@ stiffness K + c_M M + c_C C in dynamics), assembled with the Dirichlet condition
 and boundary values applied (``apply_lifting``, ``set_bc``), as for a linear solve.
 
 Linear solves reuse one LU factorisation: each Newton correction solves
-(A + J_c(u_k)) du = -F(u_k) by GMRES (right preconditioning, true residual) with the
+(A + J_c(u_k)) du = -F(u_k) by GMRES (right preconditioning, true residual; as flexible
+GMRES, which with a fixed preconditioner makes the same iterates and keeps the
+preconditioned basis vectors, so building the correction needs no extra LU solve) with the
 LU factors of A + J_c at an earlier iterate as preconditioner. J_c only touches the
 interface dofs and changes mostly where contact states change, so GMRES often needs
 few iterations; when it fails within ``refactor_after`` iterations the current A + J_c
@@ -162,7 +164,7 @@ class ContactNewtonSolver:
         comm = A.getComm()
         self._comm = comm.tompi4py()
         self.ksp = PETSc.KSP().create(comm)
-        self.ksp.setType(PETSc.KSP.Type.GMRES)
+        self.ksp.setType(PETSc.KSP.Type.FGMRES)
         self.ksp.setGMRESRestart(max(refactor_after, 1) + 5)
         self.ksp.setPCSide(PETSc.PC.Side.RIGHT)
         self.ksp.setNormType(PETSc.KSP.NormType.UNPRECONDITIONED)
