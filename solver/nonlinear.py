@@ -14,7 +14,11 @@ interface dofs and changes mostly where contact states change, so GMRES often ne
 few iterations; when it fails within ``refactor_after`` iterations the current A + J_c
 is factorised, and after a solve that needed more than ``refactor_after // 2`` GMRES
 iterations the next correction refactorises. The policy uses iteration counts, not
-timings, so a run's results do not depend on the machine's load.
+timings, so a run's results do not depend on the machine's load. GMRES multiplies the
+operator only with preconditioned vectors z = P^-1 v, P = A + J_P the factorised matrix, and
+(A + J) z = v + (J - J_P) z needs products with the interface matrices only, not with A.
+With a ``zone`` (the condensed system of ``solver.condensation``, identity rows off the zone)
+only the zone block of A + J is factorised.
 
 The corrections are inexact Newton steps (Eisenstat and Walker 1996, choice 2): GMRES
 stops at ||F + (A + J_c) du|| <= eta_k ||F||, with eta_0 = 0.5 tol / ||F_0|| (tol: the
@@ -62,15 +66,56 @@ def _residual_floor(contact) -> float:
     return estimate() if estimate is not None else 0.0
 
 
-class _SumOperator:
-    """Matrix-free action of A + J (PETSc python matrix context)."""
+class _BlockLU:
+    """Preconditioner (PETSc python PC context) applying the LU factors of P = A + J_P, or with
+    a zone those of its (zone, zone) block and the identity elsewhere, which is P^-1 itself
+    when A is block diagonal with identity rows off the zone and J lives in the zone
+    (``solver.condensation``). ``zone``: this rank's zone dofs as local indices.
 
-    def __init__(self, A: PETSc.Mat, J: PETSc.Mat):
-        self.A, self.J = A, J
+    It remembers its last input v and output z = P^-1 v, for ``_SumOperator``."""
+
+    def __init__(self, lu: PETSc.KSP, zone: np.ndarray | None):
+        self.lu, self.zone = lu, zone
+        self.last: tuple[int, PETSc.Vec] | None = None  # (handle of z, v)
+        self._vz = self._zz = None
+
+    def setUp(self, pc):  # the factorisation is ContactNewtonSolver._factorise's
+        if self.zone is not None and self._vz is None:
+            self._vz, self._zz = self.lu.getOperators()[0].createVecs()
+
+    def apply(self, pc, v, z):
+        if self.zone is None:
+            self.lu.solve(v, z)
+        else:
+            v.copy(z)
+            self._vz.array[:] = v.array_r[self.zone]
+            self.lu.solve(self._vz, self._zz)
+            z.array[self.zone] = self._zz.array_r
+        self.last = (z.handle, v)
+
+
+class _SumOperator:
+    """Action of A + J (PETSc python matrix context). FGMRES multiplies each preconditioned
+    vector z = P^-1 v right after making it; then (A + J) z = v + (J - J_P) z, with J_P the
+    Jacobian in the factorised P = A + J_P, which needs no product with A (the bulk of the
+    work; J lives on the interface). Round-off: that of the LU solve's residual."""
+
+    def __init__(self, A: PETSc.Mat, J: PETSc.Mat, J_P: PETSc.Mat, preconditioner: _BlockLU):
+        self.A, self.J, self.J_P, self.preconditioner = A, J, J_P, preconditioner
+        self._work = J.createVecLeft()
 
     def mult(self, mat, x, y):
-        self.A.mult(x, y)
-        self.J.multAdd(x, y, y)
+        last = self.preconditioner.last
+        if last is not None and last[0] == x.handle:
+            self.J.multAdd(x, last[1], y)
+            self.J_P.mult(x, self._work)
+            y.axpy(-1.0, self._work)
+        else:
+            self.A.mult(x, y)
+            self.J.multAdd(x, y, y)
+
+    def destroy(self, mat):
+        self._work.destroy()
 
 
 class ContactNewtonSolver:
@@ -112,6 +157,9 @@ class ContactNewtonSolver:
             halve from there. The slip tangent has no stiffness along the slip direction, so
             where the TP stops the Newton step slides it on until the friction reverses, and
             halving only approaches the stop linearly (docs/contact.md, section 6).
+        zone: global dofs (this rank's part) off which A is the identity and J vanishes (the
+            condensed system of ``solver.condensation.BulkCondensation``): only the zone block
+            of A + J is factorised. None: A + J is factorised whole.
     """
 
     def __init__(
@@ -130,6 +178,7 @@ class ContactNewtonSolver:
         max_backtracks: int = 0,
         max_gap_change: float | None = None,
         limit_reversal: bool = True,
+        zone: PETSc.IS | None = None,
     ):
         if max_iterations < 1:
             raise ValueError(f"max_iterations must be >= 1, got {max_iterations}")
@@ -170,34 +219,48 @@ class ContactNewtonSolver:
         self.ksp.setNormType(PETSc.KSP.NormType.UNPRECONDITIONED)
         self.ksp.setTolerances(rtol=krylov_rtol, atol=0.0, max_it=max(refactor_after, 5))
         self.ksp.setInitialGuessNonzero(False)
+        self.zone = zone
+        self._A_factored = A if zone is None else A.createSubMatrix(zone, zone)
+        self._lu = PETSc.KSP().create(comm)
+        self._lu.setType(PETSc.KSP.Type.PREONLY)
+        self._lu.getPC().setType(PETSc.PC.Type.LU)
+        self._lu.getPC().setFactorSolverType(lu_solver)
         pc = self.ksp.getPC()
-        pc.setType(PETSc.PC.Type.LU)
-        pc.setFactorSolverType(lu_solver)
+        pc.setType(PETSc.PC.Type.PYTHON)
+        self._preconditioner = _BlockLU(self._lu, None if zone is None else zone.getIndices() - A.getOwnershipRange()[0])
+        pc.setPythonContext(self._preconditioner)
+        self._J_P: PETSc.Mat | None = None  # the J in the factorised A + J
         self._P: PETSc.Mat | None = None
         self._P_pattern = None  # coo_pattern tag of the J in _P
         self._refactor_next = False
         self.factorizations = 0
 
-    def _factorise(self, J: PETSc.Mat, op: PETSc.Mat) -> None:
-        """Factorise A + J. When J carries the same ``coo_pattern`` tag as the J of the factorised
-        matrix (``NitscheContact`` tags its Jacobians), A + J has the same sparsity: the matrix
-        is refilled in place and only the numeric factorisation is redone (no new ordering)."""
+    def _factorise(self, J: PETSc.Mat) -> None:
+        """Factorise A + J (its zone block with ``zone``). When J carries the same ``coo_pattern``
+        tag as the J of the factorised matrix (``NitscheContact`` tags its Jacobians), A + J has
+        the same sparsity: the matrix is refilled in place and only the numeric factorisation
+        is redone (no new ordering)."""
         pattern = J.getAttr("coo_pattern")
+        if self._J_P is not None:
+            self._J_P.destroy()
+        self._J_P = J.copy()
+        if self.zone is not None:
+            J = J.createSubMatrix(self.zone, self.zone)
         same = self._P is not None and pattern is not None and pattern == self._P_pattern
         if self._comm.allreduce(same, op=MPI.LAND):  # collective: both branches are
             self._P.zeroEntries()
-            self._P.axpy(1.0, self.A, PETSc.Mat.Structure.SUBSET_NONZERO_PATTERN)
+            self._P.axpy(1.0, self._A_factored, PETSc.Mat.Structure.SUBSET_NONZERO_PATTERN)
             self._P.axpy(1.0, J, PETSc.Mat.Structure.SUBSET_NONZERO_PATTERN)
         else:
             if self._P is not None:
                 self._P.destroy()
-            self._P = self.A.copy()
+            self._P = self._A_factored.copy()
             self._P.axpy(1.0, J, PETSc.Mat.Structure.DIFFERENT_NONZERO_PATTERN)
             self._P_pattern = pattern
-        self.ksp.setOperators(op, self._P)
-        self.ksp.getPC().setReusePreconditioner(False)
-        self.ksp.setUp()
-        self.ksp.getPC().setReusePreconditioner(True)
+        if self.zone is not None:
+            J.destroy()
+        self._lu.setOperators(self._P)
+        self._lu.setUp()
         self.factorizations += 1
 
     def _forcing(self, norms: list[float], eta_old: float, tol: float) -> float:
@@ -220,24 +283,26 @@ class ContactNewtonSolver:
         The factors are reused until a solve needs more than ``refactor_after // 2`` GMRES
         iterations; the next correction then refactorises.
         """
-        op = PETSc.Mat().createPython(self.A.getSizes(), _SumOperator(self.A, J), comm=self.A.getComm())
-        op.setUp()
         rhs = F.copy()
         rhs.scale(-1.0)
+        self._preconditioner.last = None
         fresh = self._P is None or self.refactor_after == 0 or self._refactor_next
         self.ksp.setTolerances(rtol=eta)
         t0 = time.perf_counter()
         if fresh:
-            self._factorise(J, op)
-        else:
-            self.ksp.setOperators(op, self._P)
+            self._factorise(J)
+        op = PETSc.Mat().createPython(self.A.getSizes(), _SumOperator(self.A, J, self._J_P, self._preconditioner),
+                                      comm=self.A.getComm())
+        op.setUp()
+        self.ksp.setOperators(op)
         timings["factorise"] += time.perf_counter() - t0
         t0 = time.perf_counter()
         self.ksp.solve(rhs, du)
         its = self.ksp.getIterationNumber()
         if not fresh and self.ksp.getConvergedReason() <= 0:
             t1 = time.perf_counter()
-            self._factorise(J, op)
+            self._factorise(J)
+            op.getPythonContext().J_P = self._J_P
             timings["factorise"] += time.perf_counter() - t1
             self.ksp.solve(rhs, du)
             its += self.ksp.getIterationNumber()
@@ -326,8 +391,13 @@ class ContactNewtonSolver:
         worst = self._comm.allreduce(float(ratio.max()) if ratio.size else 0.0, op=MPI.MAX)
         return 1.0 if worst <= 1.0 else 1.0 / worst
 
-    def solve(self, b: PETSc.Vec, contact: NitscheContact, u: dolfinx.fem.Function) -> NewtonResult:
-        """Solve A u + r_c(u) = b for u (initial guess: u on entry, Dirichlet values imposed)."""
+    def solve(self, b: PETSc.Vec, contact: NitscheContact, u: dolfinx.fem.Function,
+              load_norm: float | None = None) -> NewtonResult:
+        """Solve A u + r_c(u) = b for u (initial guess: u on entry, Dirichlet values imposed).
+
+        ``load_norm``: the ||b|| [N] of the relative tolerance (default: ||b||; the condensed
+        system of ``solver.condensation`` passes its uncondensed load's, so that both stop alike).
+        """
         for bc in self.bcs:
             bc.set(u.x.array)
         u.x.scatter_forward()
@@ -337,7 +407,7 @@ class ContactNewtonSolver:
         x0 = x.duplicate()
         norms, linear = [], []
         timings = {"contact update": 0.0, "contact assembly": 0.0, "factorise": 0.0, "linear solve": 0.0}
-        b_norm = b.norm()
+        b_norm = b.norm() if load_norm is None else load_norm
         factorizations0 = self.factorizations
         result = None
         step_small = False
@@ -385,6 +455,11 @@ class ContactNewtonSolver:
 
     def destroy(self) -> None:
         self.ksp.destroy()
+        self._lu.destroy()
+        if self._J_P is not None:
+            self._J_P.destroy()
+        if self.zone is not None:
+            self._A_factored.destroy()
         if self._P is not None:
             self._P.destroy()
 
