@@ -76,6 +76,8 @@ def main(argv=None) -> int:
     p.add_argument("--contact-zone-above", type=float, default=MeshOptions.contact_zone_above,
                    help="contact zone (and contact surfaces) up to this height above the TP's lower edge [m]")
     p.add_argument("--degree", type=int, default=2)
+    p.add_argument("--condense-bulk", action="store_true",
+                   help="Newton on the contact zone with the linear bulk condensed (solver.condensation)")
     p.add_argument("--partition", choices=("sectors", "graph"), default="sectors",
                    help="parallel distribution of the cells (geometry.parameters.MeshOptions)")
     p.add_argument("--newton-rtol", type=float, default=None,
@@ -145,7 +147,8 @@ def main(argv=None) -> int:
                                              "lu_solver": a.lu_solver, "limit_reversal": not a.no_reversal_limit}
                              | ({} if a.forcing_max is None else {"forcing_max": a.forcing_max})
                              | ({} if a.newton_rtol is None else {"rtol": a.newton_rtol})
-                             | ({} if a.stall_iterations is None else {"stall_iterations": a.stall_iterations}))
+                             | ({} if a.stall_iterations is None else {"stall_iterations": a.stall_iterations}),
+                             condense_bulk=a.condense_bulk)
     problem.initialise(0.0)
     settlement = Settlement(problem.u, joint, data.cell_tags)
     dofs = V.dofmap.index_map.size_global * 3

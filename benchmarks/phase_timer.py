@@ -10,6 +10,8 @@ time (a phase nested in another is not counted twice) per phase:
     contact jacobian   NitscheContact.jacobian (+ Dirichlet row zeroing, copy into A + J)
     factorisation      ContactNewtonSolver._factorise (A + J_c copy and LU)
     linear solves      ContactNewtonSolver._correction without the factorisation (GMRES)
+    condensation       solver.condensation.BulkCondensation: building it (once per operator),
+                       the condensed load and the recovery of the bulk (one bulk solve each per step)
     bulk vectors       Elastodynamics._effective_load, load evaluation, Newmark update, A u
     other              the rest of Elastodynamics.step
 
@@ -21,13 +23,14 @@ import functools
 import time
 from collections import defaultdict
 
+import solver.condensation
 import solver.contact
 import solver.dynamics
 import solver.nonlinear
 import solver.pairing
 
 PHASES = ["pairing", "contact update", "contact residual", "contact jacobian", "factorisation",
-          "linear solves", "bulk vectors", "other"]
+          "linear solves", "condensation", "bulk vectors", "other"]
 
 
 class PhaseTimer:
@@ -77,6 +80,8 @@ class PhaseTimer:
         self._wrap(NC, "jacobian", "contact jacobian")
         self._wrap(CN, "_factorise", "factorisation")
         self._wrap(CN, "_correction", "linear solves")
+        for name in ("__init__", "reduce_load", "recover"):
+            self._wrap(solver.condensation.BulkCondensation, name, "condensation")
         for name in ("_effective_load", "_evaluate_load", "_assemble_operator"):
             self._wrap(ED, name, "bulk vectors")
         self._count_gmres(CN)

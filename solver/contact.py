@@ -153,6 +153,8 @@ class NitscheContact:
         self.slave = SlaveQuadrature(V, facet_tags, slave_tag, qdeg)
         self.master = MasterSurface(V, facet_tags, master_tag)
         self.gamma = gamma0 * material.E / self.slave.h  #: Nitsche parameter per point [Pa/m]
+        #: local cells with a slave or master facet: the only cells whose dofs r_c and J_c involve
+        self.support_cells = np.unique(np.concatenate([self.slave.cells, self.master.cells]))
         imap = V.dofmap.index_map
         self._slave_blocks = imap.local_to_global(self.slave.dofs.ravel()).reshape(self.slave.dofs.shape)
         self._sizes = (imap.size_local * 3, imap.size_global * 3)

@@ -31,11 +31,12 @@ from petsc4py import PETSc
 from dolfinx import fem
 from dolfinx.fem import petsc as fem_petsc
 
+from solver.condensation import BulkCondensation
 from solver.contact import Status
 from solver.damping import ModalDamping, RayleighDamping
 from solver.elasticity import Material, epsilon, sigma
 from solver.newmark import GeneralisedAlpha, Scheme
-from solver.nonlinear import ContactNewtonSolver, solve_contact_problem
+from solver.nonlinear import ContactNewtonSolver
 
 Load = Callable[[float, PETSc.Vec], None]  #: load(t, out): write the load vector f(t) [N] into out
 
@@ -83,7 +84,11 @@ class Elastodynamics:
     def __init__(self, V: fem.FunctionSpace, M: PETSc.Mat, K: PETSc.Mat, bcs: Sequence[fem.DirichletBC],
                  load: Load | None = None, scheme: Scheme = GeneralisedAlpha(),
                  damping: RayleighDamping | ModalDamping | None = None, contact=None,
-                 newton_options: dict | None = None):
+                 newton_options: dict | None = None, condense_bulk: bool = False):
+        if condense_bulk and not hasattr(contact, "support_cells"):
+            raise ValueError("condense_bulk needs a contact object that names its cells (NitscheContact)")
+        self.condense_bulk = condense_bulk  #: Newton on the contact zone, the bulk condensed (solver.condensation)
+        self._condensation: BulkCondensation | None = None
         self.V, self.M, self.K, self.bcs = V, M, K, list(bcs)
         self.scheme, self.damping, self.contact = scheme, damping, contact
         self.load = load
@@ -93,7 +98,7 @@ class Elastodynamics:
         self.t = 0.0
         self._bc_dofs = self._homogeneous_bc_dofs()
         self._f_old, self._f_new = K.createVecLeft(), K.createVecLeft()
-        self._b, self._work = K.createVecLeft(), K.createVecLeft()
+        self._b, self._work, self._b_hat = K.createVecLeft(), K.createVecLeft(), K.createVecLeft()
         self._r_contact_old = K.createVecLeft()  # r_c(u_n), used when alpha_f > 0
         self.contact_status: np.ndarray | None = None  #: contact status at the end of the last step (this rank's points)
         self.A = K.duplicate(copy=True)
@@ -128,9 +133,16 @@ class Elastodynamics:
         self._ksp.setOperators(self.A)
         self._dt_of_A = dt
         if self.contact is not None:  # Newton workspace (keeps an LU of A + J_c) for this A
-            if self._newton is not None:
-                self._newton.destroy()
-            self._newton = ContactNewtonSolver(self.A, self.bcs, **self.newton_options)
+            for workspace in (self._newton, self._condensation):
+                if workspace is not None:
+                    workspace.destroy()
+            if self.condense_bulk:
+                self._condensation = BulkCondensation(self.A, self.V, self.contact.support_cells,
+                                                      lu_solver=self.newton_options.get("lu_solver", "mumps"))
+                self._newton = ContactNewtonSolver(self._condensation.A_hat, self.bcs, zone=self._condensation.zone,
+                                                   **self.newton_options)
+            else:
+                self._newton = ContactNewtonSolver(self.A, self.bcs, **self.newton_options)
 
     def initialise(self, t0: float = 0.0) -> None:
         """Set t = t0 and the consistent initial acceleration M a0 = f(t0) - K u0 - C v0 - r_c(u0)."""
@@ -243,13 +255,21 @@ class Elastodynamics:
         else:
             self.contact.set_reference(self.u, dt)
             starts = self._initial_guesses(u_old, dt)
-            self.u.x.array[:] = starts[0]
-            res = solve_contact_problem(self.A, self._b, self.contact, self.u, self.bcs, solver=self._newton)
-            iterations = res.iterations
-            if not res.converged:
-                self.u.x.array[:] = starts[1]
-                res = solve_contact_problem(self.A, self._b, self.contact, self.u, self.bcs, solver=self._newton)
+            A, b, condensation = self.A, self._b, self._condensation
+            if condensation is not None:
+                A, b = condensation.A_hat, self._b_hat
+                condensation.reduce_load(self._b, b)
+            iterations = 0
+            for start in starts:
+                self.u.x.array[:] = start
+                if condensation is not None:
+                    condensation.hold_bulk(self.u, b)
+                res = self._newton.solve(b, self.contact, self.u, load_norm=self._b.norm())
                 iterations += res.iterations
+                if res.converged:
+                    break
+            if res.converged and condensation is not None:
+                condensation.recover(self._b, self.u)
             result = StepResult(res.converged, iterations, res.residual_norms, res.message)
         if not result.converged:
             self.u.x.array[:] = u_old

@@ -92,8 +92,13 @@ class ContactSettings:
     #: several ranks, where MUMPS's factors vary at round-off from run to run, which stick-slip
     #: amplifies), or "auto": MUMPS on one rank, SuperLU_DIST on several
     lu_solver: str = "auto"
+    #: Newton on the contact zone with the linear bulk condensed exactly (solver.condensation):
+    #: cheaper steps, plus |interface| bulk solves whenever the step size changes
+    condense_bulk: bool = False
 
     def __post_init__(self) -> None:
+        if not isinstance(self.condense_bulk, bool):
+            raise ValueError(f"condense_bulk must be true or false, got {self.condense_bulk!r}")
         if not (isinstance(self.max_iterations, int) and self.max_iterations >= 1):
             raise ValueError(f"max_iterations must be an integer >= 1, got {self.max_iterations!r}")
         if not (isinstance(self.max_backtracks, int) and self.max_backtracks >= 0):
@@ -608,6 +613,7 @@ def build_joint_model(comm: MPI.Comm, case: InstallationCase) -> JointModel:
             "max_gap_change": case.contact.max_gap_change or None,
             "lu_solver": _lu_package(case.contact.lu_solver, comm),
         },
+        condense_bulk=case.contact.condense_bulk,
     )
     problem.initialise(0.0)
     settlement = Settlement(problem.u, placed, mesh_data.cell_tags)

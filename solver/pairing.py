@@ -176,6 +176,7 @@ class MasterSurface:
         self.elements = el = _CellElements(V)
         facets, cells, lf = _facets_with_cells(mesh, facet_tags, tag)
         _check_tag(comm, len(facets), tag, "master")
+        self.cells = cells  #: local cells of this rank's master facets
         rows = np.arange(len(cells))[:, None]
         gnodes = mesh.geometry.dofmaps[0][cells]
         x = mesh.geometry.x[:, : el.gdim]
@@ -277,7 +278,8 @@ class SlaveQuadrature:
     ``points`` (np, gdim) [m], ``weights`` (np,) surface quadrature weights [m^2],
     ``values`` (np, ndofs) basis values, ``gradients`` (np, ndofs, gdim) physical basis
     gradients [1/m], ``dofs`` (np, ndofs) local block indices of the slave cell,
-    ``h`` (np,) cell height normal to the facet, cell volume / facet area [m].
+    ``h`` (np,) cell height normal to the facet, cell volume / facet area [m];
+    ``cells`` the local cells of the slave facets.
     """
 
     def __init__(self, V: dolfinx.fem.FunctionSpace, facet_tags: dolfinx.mesh.MeshTags, tag: int, degree: int):
@@ -285,6 +287,7 @@ class SlaveQuadrature:
         el = _CellElements(V)
         facets, cells, lf = _facets_with_cells(mesh, facet_tags, tag)
         _check_tag(mesh.comm, len(facets), tag, "slave")
+        self.cells = cells
         s_q, w_q = basix.make_quadrature(el.facet_cell, degree)
         nq = len(w_q)
         nf = len(facets)

@@ -39,6 +39,7 @@ def test_presets_are_valid_installation_cases():
         ("time.steps_per_period=2", ["steps_per_period"]),
         ("contact.slave=MP_CONTACT", ["slave and master must differ"]),
         ("contact.lu_solver=umfpack", ["lu_solver", "superlu_dist"]),
+        ("contact.condense_bulk=yes", ["condense_bulk", "true or false"]),
         ("output.checkpoint_every=0", ["checkpoint_every"]),
         ("mesh.n_circumferential=10", ["n_circumferential", "multiple of 4"]),
         ("loading.force=1", ["unknown table", "loading"]),
