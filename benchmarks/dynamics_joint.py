@@ -17,6 +17,11 @@ assembly, factorisation, linear solves, bulk vectors, other; ``benchmarks/phase_
 where the ramp stopped). ``--save-displacement`` writes the final displacement per rank
 (to compare two versions of the code). The installation demo's contact settings are
 ``--theta -1 --gamma0 1 --max-gap-change 1e-5 --backtracks 4 --rho-inf 0 --lagged-friction``.
+The bulk away from the contact surfaces is condensed (``solver/condensation.py``;
+``--no-condense-bulk`` to compare). The issue-4 target run (27.3 min on 2 idle cores, session 11):
+
+    mpirun -n 2 python benchmarks/dynamics_joint.py --theta -1 --gamma0 1 --max-gap-change 1e-5 \
+        --backtracks 4 --rho-inf 0 --lagged-friction --dt-ramp 0.01 --forcing 0.5 --contact-zone-above 0.08
 """
 
 import argparse
@@ -76,7 +81,7 @@ def main(argv=None) -> int:
     p.add_argument("--contact-zone-above", type=float, default=MeshOptions.contact_zone_above,
                    help="contact zone (and contact surfaces) up to this height above the TP's lower edge [m]")
     p.add_argument("--degree", type=int, default=2)
-    p.add_argument("--condense-bulk", action="store_true",
+    p.add_argument("--condense-bulk", action=argparse.BooleanOptionalAction, default=True,
                    help="Newton on the contact zone with the linear bulk condensed (solver.condensation)")
     p.add_argument("--partition", choices=("sectors", "graph"), default="sectors",
                    help="parallel distribution of the cells (geometry.parameters.MeshOptions)")
