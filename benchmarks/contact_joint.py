@@ -22,7 +22,7 @@ import time
 
 sys.path.insert(0, str(pathlib.Path(__file__).resolve().parent.parent))
 
-from solver import backend  # noqa: E402,F401
+from common import backend  # noqa: E402,F401
 
 import numpy as np  # noqa: E402
 import ufl  # noqa: E402
@@ -35,7 +35,7 @@ import dolfinx.fem.petsc  # noqa: E402
 from geometry import tags  # noqa: E402
 from geometry.mesh import create_joint_mesh  # noqa: E402
 from geometry.parameters import MeshOptions, geometry_from_case  # noqa: E402
-from solver.case import read_case  # noqa: E402
+from common.case import read_case  # noqa: E402
 from solver.contact import NitscheContact  # noqa: E402
 from solver.elasticity import epsilon, sigma  # noqa: E402
 from solver.friction import FrictionLaw  # noqa: E402

@@ -32,7 +32,7 @@ import time
 
 sys.path.insert(0, str(pathlib.Path(__file__).resolve().parent.parent))
 
-from solver import backend  # noqa: E402,F401
+from common import backend  # noqa: E402,F401
 
 import numpy as np  # noqa: E402
 from mpi4py import MPI  # noqa: E402
@@ -43,7 +43,7 @@ from geometry import tags  # noqa: E402
 from geometry.mesh import create_joint_mesh  # noqa: E402
 from geometry.parameters import MeshOptions, load_geometry  # noqa: E402
 from solver import checkpoint  # noqa: E402
-from solver.case import resolve_case_path  # noqa: E402
+from common.case import resolve_case_path  # noqa: E402
 from solver.contact import NitscheContact  # noqa: E402
 from solver.damping import RayleighDamping  # noqa: E402
 from solver.dynamics import ContactZoneGuard, Elastodynamics, Settlement, assemble_structure, run  # noqa: E402

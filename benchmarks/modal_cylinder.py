@@ -15,7 +15,7 @@ from pathlib import Path
 
 sys.path.insert(0, str(Path(__file__).resolve().parent.parent))  # run from a checkout
 
-from solver import backend  # noqa: E402,F401  (before dolfinx)
+from common import backend  # noqa: E402,F401  (before dolfinx)
 
 from dolfinx import fem  # noqa: E402
 from mpi4py import MPI  # noqa: E402
@@ -24,7 +24,7 @@ from geometry import tags  # noqa: E402
 from geometry.mesh import create_tube_mesh  # noqa: E402
 from geometry.parameters import ConePart, MeshOptions  # noqa: E402
 from solver.cylinder_shell import cylinder_frequencies  # noqa: E402
-from solver.elasticity import Material  # noqa: E402
+from common.material import Material  # noqa: E402
 from solver.modal import EigenOptions, clamp, modal_analysis  # noqa: E402
 from solver.modes import classify  # noqa: E402
 

@@ -21,12 +21,12 @@ from pathlib import Path
 
 sys.path.insert(0, str(Path(__file__).resolve().parent.parent))  # run from a checkout
 
-from solver import backend  # noqa: E402,F401  (before dolfinx)
+from common import backend  # noqa: E402,F401  (before dolfinx)
 
 import numpy as np  # noqa: E402
 from mpi4py import MPI  # noqa: E402
 
-from solver.case import read_case  # noqa: E402
+from common.case import read_case  # noqa: E402
 from solver.modal_joint import JointCase, joint_modes  # noqa: E402
 from solver.modes import classify  # noqa: E402
 from geometry import tags  # noqa: E402

@@ -36,13 +36,13 @@ from dataclasses import dataclass
 
 sys.path.insert(0, str(pathlib.Path(__file__).resolve().parent.parent))
 
-from solver import backend  # noqa: E402,F401
+from common import backend  # noqa: E402,F401
 
 import numpy as np  # noqa: E402
 from mpi4py import MPI  # noqa: E402
 
 from solver import checkpoint, report  # noqa: E402
-from solver.case import read_case  # noqa: E402
+from common.case import read_case  # noqa: E402
 from solver.dynamics import Observer, run  # noqa: E402
 from solver.installation import (  # noqa: E402
     InstallationCase,

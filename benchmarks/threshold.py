@@ -29,7 +29,7 @@ import time
 
 sys.path.insert(0, str(pathlib.Path(__file__).resolve().parent.parent))
 
-from solver import backend  # noqa: E402,F401
+from common import backend  # noqa: E402,F401
 
 from mpi4py import MPI  # noqa: E402
 

@@ -15,7 +15,7 @@ from pathlib import Path
 
 sys.path.insert(0, str(Path(__file__).resolve().parent.parent))  # run from a checkout
 
-from solver import backend  # noqa: F401  (before dolfinx)
+from common import backend  # noqa: F401  (before dolfinx)
 
 import numpy as np
 from mpi4py import MPI
@@ -26,8 +26,8 @@ from geometry.contact_map import plot_contact_map, rigid_contact_map
 from geometry.imperfections import ovality, read_imperfection
 from geometry.mesh import create_joint_mesh, write_paraview
 from geometry.parameters import JointGeometry, geometry_from_case
-from solver.case import read_case
-from solver.elasticity import Material
+from common.case import read_case
+from common.material import Material
 
 QUICK = ["mesh.n_circumferential=24", "mesh.axial_size=0.2"]
 

@@ -33,7 +33,7 @@ from pathlib import Path
 
 sys.path.insert(0, str(Path(__file__).resolve().parent.parent))  # run from a checkout
 
-from solver import backend  # noqa: F401,E402  (before dolfinx)
+from common import backend  # noqa: F401,E402  (before dolfinx)
 
 import numpy as np  # noqa: E402
 from mpi4py import MPI  # noqa: E402

@@ -18,12 +18,12 @@ from pathlib import Path
 
 sys.path.insert(0, str(Path(__file__).resolve().parent.parent))  # run from a checkout
 
-from solver import backend  # noqa: F401,E402  (before dolfinx)
+from common import backend  # noqa: F401,E402  (before dolfinx)
 
 from mpi4py import MPI  # noqa: E402
 
 from solver import demo_cli  # noqa: E402
-from solver.case import read_case  # noqa: E402
+from common.case import read_case  # noqa: E402
 from solver.installation import Installation, InstallationCase  # noqa: E402
 
 #: --quick: coarse mesh, a fast self-weight ramp, no lead-in, short stages and frictionless

@@ -21,7 +21,7 @@ from pathlib import Path
 
 sys.path.insert(0, str(Path(__file__).resolve().parents[1]))  # repo packages
 
-from solver import backend  # noqa: E402,F401  (before mpi4py)
+from common import backend  # noqa: E402,F401  (before mpi4py)
 from mpi4py import MPI  # noqa: E402
 
 import numpy as np  # noqa: E402

@@ -14,11 +14,11 @@ from pathlib import Path
 
 sys.path.insert(0, str(Path(__file__).resolve().parent.parent))  # run from a checkout
 
-from solver import backend  # noqa: F401  (before dolfinx)
+from common import backend  # noqa: F401  (before dolfinx)
 
 from mpi4py import MPI
 
-from solver.case import read_case
+from common.case import read_case
 from solver.modal_joint import JointCase, joint_modes
 from solver.modal_report import JointParts, describe_modes, format_table, write_outputs
 

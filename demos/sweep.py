@@ -26,7 +26,7 @@ from pathlib import Path
 
 sys.path.insert(0, str(Path(__file__).resolve().parent.parent))  # run from a checkout
 
-from solver import backend  # noqa: F401,E402  (before dolfinx)
+from common import backend  # noqa: F401,E402  (before dolfinx)
 
 from dataclasses import asdict  # noqa: E402
 

@@ -1,3 +1,3 @@
 """Geometry of the slip-joint cones: parameters, gmsh meshes, imperfections."""
 
-from solver import backend  # noqa: F401  (must precede dolfinx/petsc4py/slepc4py)
+from common import backend  # noqa: F401  (must precede dolfinx/petsc4py/slepc4py)

@@ -26,8 +26,8 @@ from typing import Any, Literal
 import numpy as np
 import numpy.typing as npt
 
-from solver.case import construct, read_case
-from solver.elasticity import Material
+from common.case import construct, read_case
+from common.material import Material
 
 #: accepted mismatch of a given cone-top diameter, relative to the bottom diameter
 TOP_DIAMETER_RTOL = 1e-3
@@ -339,7 +339,7 @@ def material_from_dict(data: dict[str, Any]) -> Material:
 
 
 def geometry_from_case(case: dict[str, Any]) -> tuple[JointGeometry, Material, MeshOptions]:
-    """Joint, material and mesh options from a case dict (:func:`solver.case.read_case`).
+    """Joint, material and mesh options from a case dict (:func:`common.case.read_case`).
 
     Uses ``[geometry.mp]``, ``[geometry.tp]``, ``[material]`` and ``[mesh]``; other
     tables are ignored; a missing ``[material]`` or ``[mesh]`` gives the defaults.

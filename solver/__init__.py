@@ -1,3 +1,3 @@
 """Elastodynamics, frictional contact and modal analysis of the slip-joint."""
 
-from solver import backend  # noqa: F401  (must precede dolfinx/petsc4py/slepc4py)
+from common import backend  # noqa: F401  (must precede dolfinx/petsc4py/slepc4py)

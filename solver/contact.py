@@ -37,7 +37,7 @@ import numpy.typing as npt
 import dolfinx
 import dolfinx.fem.petsc
 
-from solver.elasticity import Material
+from common.material import Material
 from solver.friction import FrictionLaw
 from solver.pairing import MasterSurface, SlaveQuadrature, pair
 

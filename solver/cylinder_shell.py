@@ -19,7 +19,7 @@ from numpy.polynomial import Polynomial
 from numpy.polynomial import legendre
 from scipy.linalg import eigh
 
-from solver.elasticity import Material
+from common.material import Material
 
 EndCondition = Literal["clamped", "free"]
 

@@ -16,7 +16,7 @@ from typing import Any
 
 from mpi4py import MPI
 
-from solver.case import read_case
+from common.case import read_case
 from solver.installation import Installation, InstallationCase
 
 #: the very coarse joint (8 around, 0.25 m) with 10 mm axial elements in the contact zone

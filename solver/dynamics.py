@@ -34,7 +34,8 @@ from dolfinx.fem import petsc as fem_petsc
 from solver.condensation import BulkCondensation
 from solver.contact import Status
 from solver.damping import ModalDamping, RayleighDamping
-from solver.elasticity import Material, epsilon, sigma
+from common.material import Material
+from solver.elasticity import epsilon, sigma
 from solver.newmark import GeneralisedAlpha, Scheme
 from solver.nonlinear import ContactNewtonSolver
 

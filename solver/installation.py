@@ -32,7 +32,7 @@ from dataclasses import asdict, dataclass, field, replace
 from pathlib import Path
 from typing import Any
 
-from solver import backend  # noqa: F401  (before dolfinx/petsc4py)
+from common import backend  # noqa: F401  (before dolfinx/petsc4py)
 
 import numpy as np
 from dolfinx import fem
@@ -45,11 +45,11 @@ from geometry.imperfections import RadialDeviation, ovality, read_imperfection
 from geometry.mesh import create_joint_mesh
 from geometry.parameters import JointGeometry, MeshOptions, geometry_from_case
 from solver import checkpoint, report
-from solver.case import construct
+from common.case import construct
 from solver.contact import NitscheContact, Status
 from solver.damping import ModalDamping, RayleighDamping
 from solver.dynamics import ContactZoneGuard, Elastodynamics, Settlement, StepResult, assemble_structure, run
-from solver.elasticity import Material
+from common.material import Material
 from solver.friction import FrictionLaw
 from solver.loads import (
     PiecewiseLinearForce,

@@ -36,7 +36,7 @@ from petsc4py import PETSc
 from dolfinx import fem, la
 from dolfinx.fem import petsc as fem_petsc
 
-from solver.case import construct
+from common.case import construct
 from solver.probes import PointLocator
 
 ECCENTRIC_COEFFICIENT = 0.3632  #: eccentric-motor force amplitude per f^2 [N/Hz^2] (SPEC 3)

@@ -21,7 +21,7 @@ from dataclasses import dataclass
 from itertools import count
 from typing import Protocol
 
-from solver import backend  # noqa: F401  (before dolfinx/petsc4py/slepc4py)
+from common import backend  # noqa: F401  (before dolfinx/petsc4py/slepc4py)
 
 import numpy as np
 import ufl
@@ -31,7 +31,8 @@ from mpi4py import MPI
 from petsc4py import PETSc
 from slepc4py import SLEPc
 
-from solver.elasticity import Material, epsilon, sigma
+from common.material import Material
+from solver.elasticity import epsilon, sigma
 
 _solver_ids = count()
 

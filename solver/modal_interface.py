@@ -10,7 +10,7 @@ point, OPEN elsewhere"; a settled contact state is the status of an equilibrium
 computed by the contact solver. Both go through the same class.
 """
 
-from solver import backend  # noqa: F401  (before dolfinx/petsc4py)
+from common import backend  # noqa: F401  (before dolfinx/petsc4py)
 
 import numpy as np
 import numpy.typing as npt
@@ -19,7 +19,7 @@ from petsc4py import PETSc
 
 from geometry import tags
 from solver.contact import NitscheContact, Status
-from solver.elasticity import Material
+from common.material import Material
 from solver.friction import FrictionLaw
 
 

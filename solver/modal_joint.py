@@ -18,7 +18,7 @@ from collections.abc import Callable
 from dataclasses import dataclass, replace
 from typing import Any
 
-from solver import backend  # noqa: F401  (before dolfinx)
+from common import backend  # noqa: F401  (before dolfinx)
 
 from dolfinx import fem
 from mpi4py import MPI
@@ -26,8 +26,8 @@ from mpi4py import MPI
 from geometry import tags
 from geometry.mesh import create_joint_mesh
 from geometry.parameters import JointGeometry, MeshOptions, material_from_dict
-from solver.case import construct
-from solver.elasticity import Material
+from common.case import construct
+from common.material import Material
 from solver.modal import EigenOptions, ModalResult, clamp, modal_analysis
 from solver.modal_interface import ContactInterface, bonded_band
 

@@ -23,13 +23,13 @@ from collections.abc import Mapping
 from dataclasses import asdict, dataclass
 from pathlib import Path
 
-from solver import backend  # noqa: F401  (before dolfinx)
+from common import backend  # noqa: F401  (before dolfinx)
 
 import numpy as np
 from dolfinx import fem, io, plot
 from mpi4py import MPI
 
-from solver.elasticity import Material
+from common.material import Material
 from solver.modal import ModalResult
 from solver.loads import PointLoad, TopFaceLoad, eccentric_amplitude, shaker_point
 from solver.mode_indicators import InterfaceSampler, energy_shares, modal_force, resonant_slip

@@ -16,7 +16,7 @@ All quantities refer to mass-normalised modes (phi^T M phi = 1):
 
 from collections.abc import Callable, Sequence
 
-from solver import backend  # noqa: F401  (before dolfinx/petsc4py)
+from common import backend  # noqa: F401  (before dolfinx/petsc4py)
 
 import numpy as np
 import ufl
@@ -24,7 +24,8 @@ from dolfinx import fem
 from mpi4py import MPI
 from petsc4py import PETSc
 
-from solver.elasticity import Material, epsilon, sigma
+from common.material import Material
+from solver.elasticity import epsilon, sigma
 from solver.probes import PointProbe
 
 

@@ -18,7 +18,7 @@ noise near a clamp is not counted as a node.
 
 from dataclasses import dataclass
 
-from solver import backend  # noqa: F401  (before dolfinx)
+from common import backend  # noqa: F401  (before dolfinx)
 
 import numpy as np
 from dolfinx import fem

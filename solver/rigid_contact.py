@@ -34,7 +34,8 @@ from petsc4py import PETSc
 from dolfinx import fem
 from dolfinx.fem import petsc as fem_petsc
 
-from solver.elasticity import Material, sigma
+from common.material import Material
+from solver.elasticity import sigma
 from solver.friction import FrictionLaw
 
 OPEN, STICK, SLIP = 0, 1, 2

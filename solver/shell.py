@@ -35,7 +35,7 @@ import numpy.typing as npt
 from scipy.integrate import solve_bvp
 
 from geometry.parameters import ConePart, JointGeometry
-from solver.elasticity import Material
+from common.material import Material
 
 #: default relative tolerance of the collocation solver
 BVP_TOL = 1e-8

@@ -5,4 +5,4 @@ import os
 os.environ.setdefault("PYVISTA_OFF_SCREEN", "true")
 os.environ.setdefault("MPLBACKEND", "Agg")
 
-from solver import backend  # noqa: E402,F401
+from common import backend  # noqa: E402,F401

@@ -197,7 +197,8 @@ def sliding_block(
 
     import dolfinx.fem.petsc
     from solver.contact import NitscheContact, Status
-    from solver.elasticity import Material, epsilon, sigma
+    from common.material import Material
+    from solver.elasticity import epsilon, sigma
     from solver.nonlinear import ContactNewtonSolver
 
     H, q = 0.25, 1e6

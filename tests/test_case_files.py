@@ -2,7 +2,7 @@
 
 import pytest
 
-from solver.case import apply_override, construct, read_case
+from common.case import apply_override, construct, read_case
 from solver.friction import FrictionLaw
 
 

@@ -15,13 +15,13 @@ from mpi4py import MPI
 import numpy as np
 import pytest
 
-from solver import backend  # noqa: F401
+from common import backend  # noqa: F401
 from dolfinx import fem
 
 from geometry import tags
 from geometry.mesh import create_joint_mesh
 from geometry.parameters import MeshOptions, geometry_from_case
-from solver.case import read_case
+from common.case import read_case
 from solver.contact import NitscheContact, Status
 from solver.damping import RayleighDamping
 from solver.dynamics import Elastodynamics, Settlement, assemble_structure, run

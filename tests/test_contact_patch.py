@@ -14,7 +14,7 @@ import pytest
 import dolfinx
 from contact_cases import MASTER, SLAVE, elastic_system, fixed, gathered, two_blocks
 from solver.contact import NitscheContact, Status
-from solver.elasticity import Material
+from common.material import Material
 from solver.friction import FrictionLaw
 from solver.nonlinear import solve_contact_problem
 

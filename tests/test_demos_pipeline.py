@@ -17,7 +17,7 @@ import pytest
 from mpi4py import MPI
 
 from geometry import tags
-from solver.case import read_case
+from common.case import read_case
 from solver.dismount import DismountPlan, dismount_case, dismount_table
 from solver.installation import Installation, InstallationCase, build_joint_model
 

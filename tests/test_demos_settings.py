@@ -10,7 +10,7 @@ from mpi4py import MPI
 
 from geometry.contact_map import tp_placement
 from geometry.imperfections import ovality
-from solver.case import read_case
+from common.case import read_case
 from solver.installation import Excitation, InstallationCase, _schedule_excitations
 from solver.loads import (
     PiecewiseLinearForce,

@@ -19,8 +19,8 @@ import pytest
 pytestmark = pytest.mark.mpi  # imports the DOLFINx stack (for its versions)
 
 ROOT = Path(__file__).resolve().parents[1]
-CODE_DIRS = ("solver", "geometry", "demos", "tests", "benchmarks")
-WHEEL_ONLY = "dolfinx_solver"  # PyPI wheel only; imported in solver/backend.py alone
+CODE_DIRS = ("common", "solver", "geometry", "demos", "tests", "benchmarks")
+WHEEL_ONLY = "dolfinx_solver"  # PyPI wheel only; imported in common/backend.py alone
 
 # Import name -> Debian package that provides it, where not python3-<name>.
 # basix, ufl and ffcx come with python3-dolfinx-real (it depends on them).
@@ -122,7 +122,7 @@ def test_wheel_module_is_imported_only_by_the_backend():
         for path in python_files()
         if WHEEL_ONLY in top_level_imports(path)
     ]
-    assert users == ["solver/backend.py"]
+    assert users == ["common/backend.py"]
 
 
 def test_dockerfile_default_command_runs_an_existing_demo():

@@ -20,7 +20,7 @@ from mpi4py import MPI
 import numpy as np
 import pytest
 
-from solver import backend  # noqa: F401
+from common import backend  # noqa: F401
 from petsc4py import PETSc
 from dolfinx import fem
 from dolfinx.fem import petsc as fem_petsc
@@ -28,7 +28,7 @@ from dolfinx.fem import petsc as fem_petsc
 from geometry import tags
 from geometry.mesh import create_joint_mesh
 from geometry.parameters import MeshOptions, geometry_from_case
-from solver.case import read_case
+from common.case import read_case
 from solver.condensation import BulkCondensation
 from solver.contact import NitscheContact
 from solver.damping import RayleighDamping

@@ -13,7 +13,7 @@ from dolfinx import fem
 from geometry import tags
 from geometry.mesh import create_joint_mesh
 from geometry.parameters import MeshOptions, load_geometry
-from solver.case import resolve_case_path
+from common.case import resolve_case_path
 from solver.dynamics import Settlement, StepResult, run
 
 pytestmark = pytest.mark.mpi

@@ -16,7 +16,7 @@ from dolfinx.fem.petsc import set_bc
 
 from solver.damping import ModalDamping, RayleighDamping
 from solver.dynamics import Elastodynamics, assemble_structure, run
-from solver.elasticity import Material
+from common.material import Material
 from solver.newmark import GeneralisedAlpha, QuasiStatic
 
 pytestmark = pytest.mark.mpi

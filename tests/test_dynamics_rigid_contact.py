@@ -23,7 +23,7 @@ from dolfinx import fem, mesh
 from dolfinx.fem.petsc import assemble_vector
 
 from solver.dynamics import Elastodynamics, assemble_structure, run
-from solver.elasticity import Material
+from common.material import Material
 from solver.friction import FrictionLaw
 from solver.loads import TopFaceLoad
 from solver.newmark import GeneralisedAlpha, QuasiStatic

@@ -7,7 +7,7 @@ import pytest
 from scipy.integrate import quad
 
 from geometry.parameters import ConePart, JointGeometry, MeshOptions, load_geometry
-from solver.elasticity import Material
+from common.material import Material
 
 CASES = Path(__file__).resolve().parents[1] / "cases"
 

@@ -48,7 +48,7 @@ import pytest
 from mpi4py import MPI
 
 from solver import checkpoint
-from solver.case import read_case
+from common.case import read_case
 from solver.contact import Status
 from solver.demo_cli import COARSE_FRICTIONAL
 from solver.dismount import DismountPlan, pull_out_force

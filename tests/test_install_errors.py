@@ -6,7 +6,7 @@ import numpy as np
 import pytest
 from mpi4py import MPI
 
-from solver.case import read_case
+from common.case import read_case
 from solver.installation import InstallationCase
 
 pytestmark = pytest.mark.mpi
@@ -77,7 +77,7 @@ def test_bad_schedule_stage(tmp_path_factory):
 
 
 def read_case_text() -> str:
-    from solver.case import resolve_case_path
+    from common.case import resolve_case_path
 
     return resolve_case_path("scaled").read_text()
 

@@ -16,7 +16,7 @@ import numpy as np
 import pytest
 from mpi4py import MPI
 
-from solver.case import read_case
+from common.case import read_case
 from solver.demo_cli import COARSE_FRICTIONAL
 from solver.installation import Installation, InstallationCase
 
@@ -157,7 +157,7 @@ def test_frictional_resume_repeats_the_uninterrupted_run(tmp_path_factory):
     resumed: the same displacement and settlement history as without the kill (1e-8), although
     stick-slip amplifies any round-off difference. Up to the kill the killed run is the same
     input computed a second time and must repeat the arithmetic (1e-13): with PETSc's BLAS-gemv
-    Gram-Schmidt in GMRES two such runs differed by 4e-10 in the first step (solver/backend.py)."""
+    Gram-Schmidt in GMRES two such runs differed by 4e-10 in the first step (common/backend.py)."""
     case = InstallationCase.from_dict(read_case("scaled", FRICTIONAL))
     comm = MPI.COMM_WORLD
     full = Installation(comm, case, _shared_dir(tmp_path_factory, "friction_full"), progress=False)

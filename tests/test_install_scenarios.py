@@ -29,7 +29,7 @@ import numpy as np
 import pytest
 from mpi4py import MPI
 
-from solver.case import read_case
+from common.case import read_case
 from solver.demo_cli import COARSE_FRICTIONAL
 from solver.dynamics import run
 from solver.installation import InstallationCase, build_joint_model, settled_modes

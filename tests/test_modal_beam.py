@@ -4,7 +4,7 @@ import numpy as np
 import pytest
 from mpi4py import MPI
 
-from solver.elasticity import Material
+from common.material import Material
 from solver.modal import EigenOptions, modal_analysis
 
 from dolfinx import fem, mesh

@@ -13,7 +13,7 @@ from geometry import tags
 from geometry.mesh import create_tube_mesh
 from geometry.parameters import ConePart, MeshOptions
 from solver.cylinder_shell import cylinder_frequencies
-from solver.elasticity import Material
+from common.material import Material
 from solver.modal import EigenOptions, clamp, modal_analysis
 from solver.modes import classify
 

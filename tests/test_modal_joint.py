@@ -12,9 +12,9 @@ import dolfinx.io.gmsh
 from dolfinx import fem, mesh
 
 from geometry import tags
-from solver.case import read_case
+from common.case import read_case
 from solver.contact import Status
-from solver.elasticity import Material
+from common.material import Material
 from solver.modal import EigenOptions, clamp, modal_analysis
 from solver.modal_interface import ContactInterface, bonded_band
 from solver.modal_joint import JointCase, joint_modes

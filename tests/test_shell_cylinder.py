@@ -7,7 +7,7 @@ from itertools import pairwise
 import numpy as np
 import pytest
 
-from solver.elasticity import Material
+from common.material import Material
 from solver.shell import Meridian, Shell, ring_flexibility, solve_ring_load
 
 MAT = Material(E=210e9, nu=0.3)

@@ -14,7 +14,7 @@ import pytest
 import ufl
 from mpi4py import MPI
 
-from solver import backend  # noqa: F401  (before dolfinx)
+from common import backend  # noqa: F401  (before dolfinx)
 import dolfinx.fem.petsc  # noqa: E402
 from dolfinx import fem  # noqa: E402
 

@@ -5,7 +5,8 @@ With the PyPI wheel ``dolfinx-solver-real``, ``import dolfinx_solver`` must come
 before mpi4py/dolfinx/petsc4py/slepc4py (it orders MPI ahead of the compiled
 bindings). Debian's ``python3-dolfinx`` has no such module, so the import is
 guarded. Every module that needs DOLFINx imports this module first (``solver``
-and ``geometry`` do so in their ``__init__``).
+and ``geometry`` do so in their ``__init__``; ``common`` itself does not, so that its
+case files and material load without the DOLFINx stack).
 
 Reproducibility: by default PETSc computes the Gram-Schmidt products of GMRES
 (``VecMDot``/``VecMAXPY`` over the contiguous block of Krylov vectors) with BLAS gemv,
