@@ -47,7 +47,7 @@ from common.case import resolve_case_path  # noqa: E402
 from solver.contact import NitscheContact  # noqa: E402
 from solver.damping import RayleighDamping  # noqa: E402
 from solver.dynamics import ContactZoneGuard, Elastodynamics, Settlement, assemble_structure, run  # noqa: E402
-from solver.friction import FrictionLaw  # noqa: E402
+from solver.contact import FrictionLaw  # noqa: E402
 from solver.loads import RampedAxialForce, Schedule, Stage, TopFaceLoad, TPLoading  # noqa: E402
 from solver.modal import clamp  # noqa: E402
 from solver.newmark import GeneralisedAlpha  # noqa: E402

@@ -4,7 +4,7 @@
 ``solver.dynamics.Elastodynamics`` with contact and accumulates *exclusive* wall
 time (a phase nested in another is not counted twice) per phase:
 
-    pairing            solver.pairing.pair (closest-point projection)
+    pairing            solver.contact.pairing.pair (closest-point projection)
     contact update     NitscheContact.update without the pairing (state at the iterate)
     contact residual   NitscheContact.residual
     contact jacobian   NitscheContact.jacobian (+ Dirichlet row zeroing, copy into A + J)
@@ -24,10 +24,9 @@ import time
 from collections import defaultdict
 
 import solver.condensation
-import solver.contact
+import solver.contact.nitsche
 import solver.dynamics
 import solver.nonlinear
-import solver.pairing
 
 PHASES = ["pairing", "contact update", "contact residual", "contact jacobian", "factorisation",
           "linear solves", "condensation", "bulk vectors", "other"]
@@ -72,9 +71,9 @@ class PhaseTimer:
         self._undo.append((owner, name, original))
 
     def install(self) -> "PhaseTimer":
-        NC, CN, ED = solver.contact.NitscheContact, solver.nonlinear.ContactNewtonSolver, solver.dynamics.Elastodynamics
+        NC, CN, ED = solver.contact.nitsche.NitscheContact, solver.nonlinear.ContactNewtonSolver, solver.dynamics.Elastodynamics
         self._wrap(ED, "step", "other")
-        self._wrap(solver.contact, "pair", "pairing")
+        self._wrap(solver.contact.nitsche, "pair", "pairing")
         self._wrap(NC, "update", "contact update")
         self._wrap(NC, "residual", "contact residual")
         self._wrap(NC, "jacobian", "contact jacobian")

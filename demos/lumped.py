@@ -27,7 +27,7 @@ from mpi4py import MPI  # noqa: E402
 import numpy as np  # noqa: E402
 
 from geometry.parameters import JointGeometry, load_geometry  # noqa: E402
-from solver.friction import FrictionLaw  # noqa: E402
+from solver.contact import FrictionLaw  # noqa: E402
 from solver.lumped import GRAVITY, AxialLoad, LumpedModel, simulate  # noqa: E402
 from solver.shell import JointStiffness, joint_stiffness  # noqa: E402
 

@@ -12,7 +12,7 @@ generalised-alpha, or quasi-static). Each step solves the effective system
 with a reused LU factorisation of A when there is no contact, and with
 ``solver.nonlinear.solve_contact_problem`` (generalised Newton, LU of A + J_c reused
 across iterations and steps while dt is unchanged) when there is. The contact object
-is ``solver.contact.NitscheContact`` (two bodies) or ``solver.rigid_contact.RigidPlaneContact``.
+is ``solver.contact.NitscheContact`` (two bodies) or ``solver.contact.RigidPlaneContact``.
 Modal damping is low rank and enters b explicitly through the Newmark-predicted
 velocity v_n + (1 - alpha_f) dt a_n (error O(dt^2), see ``solver.damping``).
 Dirichlet conditions must be homogeneous (clamped boundaries).
@@ -354,9 +354,20 @@ class Settlement:
         return {"settlement_mm": 1e3 * float(s)}
 
 
+def touches_top(contact, margin: float, axis: int = 2) -> bool:
+    """Whether a slave point of ``contact`` within ``margin`` [m] of the slave surface's highest
+    point along ``axis`` (reference coordinates) is in contact, on any rank: the contact band
+    has reached the upper end of the surface, above which no contact is modelled."""
+    z = contact.slave.points[:, axis]
+    comm = contact.V.mesh.comm
+    z_max = comm.allreduce(z.max() if len(z) else -np.inf, op=MPI.MAX)
+    touching = (z >= z_max - margin) & (contact.state.status != Status.OPEN)
+    return comm.allreduce(bool(touching.any()), op=MPI.LOR)
+
+
 class ContactZoneGuard:
     """Observer for ``run`` that stops the run (RuntimeError) when the contact band reaches the
-    upper ``margin`` [m] of the slave surface (``NitscheContact.touches_top``): with a contact
+    upper ``margin`` [m] of the slave surface (:func:`touches_top`): with a contact
     zone (``MeshOptions.contact_axial_size`` > 0) the contact surfaces end at its top, and
     contact beyond it would be missed. ``margin``: the zone's element height."""
 
@@ -364,7 +375,7 @@ class ContactZoneGuard:
         self.contact, self.margin, self.zone_above = contact, margin, zone_above
 
     def __call__(self, problem: Elastodynamics) -> dict[str, float]:
-        if self.contact.touches_top(self.margin):
+        if touches_top(self.contact, self.margin):
             raise RuntimeError(
                 f"at t = {problem.t:.6g} s the contact band reached the top of the contact zone "
                 f"({self.zone_above} m above the TP's lower edge), where the contact surfaces end: "

@@ -46,11 +46,10 @@ from geometry.mesh import create_joint_mesh
 from geometry.parameters import JointGeometry, MeshOptions, geometry_from_case
 from solver import checkpoint, report
 from common.case import construct
-from solver.contact import NitscheContact, Status
+from solver.contact import FrictionLaw, NitscheContact, Status
 from solver.damping import ModalDamping, RayleighDamping
 from solver.dynamics import ContactZoneGuard, Elastodynamics, Settlement, StepResult, assemble_structure, run
 from common.material import Material
-from solver.friction import FrictionLaw
 from solver.loads import (
     PiecewiseLinearForce,
     PointLoad,

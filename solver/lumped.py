@@ -38,7 +38,7 @@ import numpy.typing as npt
 from scipy.integrate import solve_ivp
 from scipy.linalg import eigh
 
-from solver.friction import FrictionLaw
+from solver.contact import FrictionLaw
 from solver.shell import JointStiffness
 
 #: standard gravity [m/s^2]

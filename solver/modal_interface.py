@@ -15,12 +15,12 @@ from common import backend  # noqa: F401  (before dolfinx/petsc4py)
 import numpy as np
 import numpy.typing as npt
 from dolfinx import fem
+from mpi4py import MPI
 from petsc4py import PETSc
 
 from geometry import tags
-from solver.contact import NitscheContact, Status
+from solver.contact import FrictionLaw, NitscheContact, Status
 from common.material import Material
-from solver.friction import FrictionLaw
 
 
 class ContactInterface:
@@ -49,6 +49,17 @@ class ContactInterface:
         return tied / comm.allreduce(len(self.status))
 
 
+def band_status(contact: NitscheContact, height: float, axis: int = 2) -> npt.NDArray:
+    """STICK for the slave points of ``contact`` within ``height`` [m] of the slave surface's
+    lowest point along ``axis`` (e.g. a bonded band at the TP lower edge), OPEN elsewhere
+    (reference coordinates)."""
+    if not height >= 0:
+        raise ValueError(f"band height must be >= 0 m, got {height}")
+    z = contact.slave.points[:, axis]
+    z_min = contact.V.mesh.comm.allreduce(z.min() if len(z) else np.inf, op=MPI.MIN)
+    return np.where(z <= z_min + height, Status.STICK, Status.OPEN).astype(np.int8)
+
+
 def bonded_band(
     V: fem.FunctionSpace, facet_tags, material: Material, height: float, gamma0: float = 100.0
 ) -> ContactInterface:
@@ -66,4 +77,4 @@ def bonded_band(
         gamma0=gamma0,
         theta=1,
     )
-    return ContactInterface(contact, contact.band_status(height))
+    return ContactInterface(contact, band_status(contact, height))

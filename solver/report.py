@@ -341,7 +341,33 @@ def write_state(model, folder: Path, name: str, k: int) -> None:
     u = model.problem.u
     with io.VTXWriter(model.comm, folder / f"displacement_{k}.bp", [u], engine="BP4") as writer:
         writer.write(model.problem.t)
-    model.contact.write_surface(folder / f"contact_{k}.vtp")
+    write_contact_points(model.contact, folder / f"contact_{k}.vtp")
+
+
+def write_contact_points(contact: NitscheContact, path) -> None:
+    """Write the slave points with their state as VTK PolyData (.vtp) for ParaView (rank 0 writes).
+
+    Point data: status (0 open, 1 stick, 2 slip), gap_m, pressure_Pa,
+    tangential_traction_Pa (vector), slip_velocity_m_s (vector), at the deformed points.
+    """
+    comm = contact.V.mesh.comm
+    st = contact.state
+    fields = {
+        "status": st.status.astype(np.int32),
+        "gap_m": st.gap,
+        "pressure_Pa": st.pressure,
+        "tangential_traction_Pa": st.tangential_traction,
+        "slip_velocity_m_s": st.slip_velocity,
+    }
+    points = comm.gather(st.coordinates, root=0)
+    data = {name: comm.gather(a, root=0) for name, a in fields.items()}
+    if comm.rank == 0:
+        import pyvista
+
+        cloud = pyvista.PolyData(np.concatenate(points))
+        for name, parts in data.items():
+            cloud.point_data[name] = np.concatenate(parts)
+        cloud.save(str(path))
 
 
 def plot_contact_status(contact: NitscheContact, joint, path: Path, title: str) -> None:

@@ -3,7 +3,7 @@
 import pytest
 
 from common.case import apply_override, construct, read_case
-from solver.friction import FrictionLaw
+from solver.contact import FrictionLaw
 
 
 def test_presets_resolve_and_overrides_apply():

@@ -25,7 +25,7 @@ from common.case import read_case
 from solver.contact import NitscheContact, Status
 from solver.damping import RayleighDamping
 from solver.dynamics import Elastodynamics, Settlement, assemble_structure, run
-from solver.friction import FrictionLaw
+from solver.contact import FrictionLaw
 from solver.loads import RampedAxialForce, TopFaceLoad, TPLoading
 from solver.newmark import GeneralisedAlpha
 

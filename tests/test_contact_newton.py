@@ -25,7 +25,7 @@ import dolfinx
 from petsc4py import PETSc
 from contact_cases import gathered, sliding_block
 from solver.contact import NitscheContact, Status
-from solver.friction import FrictionLaw
+from solver.contact import FrictionLaw
 
 pytestmark = pytest.mark.mpi
 

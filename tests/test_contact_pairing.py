@@ -7,7 +7,7 @@ import pytest
 
 import dolfinx
 from contact_cases import MASTER, SLAVE, two_blocks, two_rings
-from solver.pairing import MasterSurface, SlaveQuadrature, pair
+from solver.contact import MasterSurface, SlaveQuadrature, pair
 
 pytestmark = pytest.mark.mpi
 

@@ -15,7 +15,7 @@ import dolfinx
 from contact_cases import MASTER, SLAVE, elastic_system, fixed, gathered, two_blocks
 from solver.contact import NitscheContact, Status
 from common.material import Material
-from solver.friction import FrictionLaw
+from solver.contact import FrictionLaw
 from solver.nonlinear import solve_contact_problem
 
 pytestmark = pytest.mark.mpi

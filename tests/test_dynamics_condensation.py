@@ -33,7 +33,7 @@ from solver.condensation import BulkCondensation
 from solver.contact import NitscheContact
 from solver.damping import RayleighDamping
 from solver.dynamics import Elastodynamics, Settlement, assemble_structure, run
-from solver.friction import FrictionLaw
+from solver.contact import FrictionLaw
 from solver.loads import RampedAxialForce, TopFaceLoad, TPLoading
 from solver.newmark import GeneralisedAlpha
 

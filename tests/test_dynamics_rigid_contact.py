@@ -24,11 +24,11 @@ from dolfinx.fem.petsc import assemble_vector
 
 from solver.dynamics import Elastodynamics, assemble_structure, run
 from common.material import Material
-from solver.friction import FrictionLaw
+from solver.contact import FrictionLaw
 from solver.loads import TopFaceLoad
 from solver.newmark import GeneralisedAlpha, QuasiStatic
 from solver.probes import PointProbe
-from solver.rigid_contact import SLIP, RigidPlaneContact
+from solver.contact import RigidPlaneContact, Status
 
 pytestmark = pytest.mark.mpi
 
@@ -175,7 +175,7 @@ def friction_oscillator(periods: float = 2.0, friction_force: float = F_FRICTION
     centre = PointProbe(problem.u, [[a / 2, a / 2, 0.0]])
 
     def observe(p):
-        slipping = domain.comm.allreduce(int(np.sum(contact.state.status == SLIP)))
+        slipping = domain.comm.allreduce(int(np.sum(contact.state.status == Status.SLIP)))
         return {"x_m": centre()[0, 0], "slipping": slipping}
 
     period = 2 * np.pi / OMEGA

@@ -3,7 +3,7 @@
 import numpy as np
 import pytest
 
-from solver.friction import FrictionLaw
+from solver.contact import FrictionLaw
 
 
 def test_limits_and_decay():

@@ -11,7 +11,7 @@ from scipy.linalg import expm
 from scipy.optimize import brentq
 
 from geometry.parameters import load_geometry
-from solver.friction import FrictionLaw
+from solver.contact import FrictionLaw
 from solver.lumped import GRAVITY, AxialLoad, LumpedModel, Mode, simulate
 from solver.shell import joint_stiffness
 

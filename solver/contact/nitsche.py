@@ -1,7 +1,7 @@
 """Nitsche frictional contact between two deformable bodies of one mesh (docs/contact.md).
 
 Slave points x (quadrature points of the slave facets, deformed) are paired with their
-closest points y on the deformed master surface (solver/pairing.py). With n = -n_m
+closest points y on the deformed master surface (solver/contact/pairing.py). With n = -n_m
 (n_m: master outward normal at y; n approximates the slave outward normal):
 
     gap             g   = (x - y) . n_m                               [m]
@@ -24,10 +24,6 @@ of the normal n_m and of the projection y with u (curvature/geometric terms of o
 lambda x rotation) are dropped.
 """
 
-import itertools
-from dataclasses import dataclass
-from enum import IntEnum
-
 from mpi4py import MPI
 from petsc4py import PETSc
 
@@ -35,60 +31,15 @@ import numpy as np
 import numpy.typing as npt
 
 import dolfinx
-import dolfinx.fem.petsc
 
 from common.material import Material
-from solver.friction import FrictionLaw
-from solver.pairing import MasterSurface, SlaveQuadrature, pair
+from solver.contact.assembly import PointMatrices, assemble_point_vector, grouped_products
+from solver.contact.friction import FrictionLaw
+from solver.contact.model import ContactState, Status
+from solver.contact.pairing import pair
+from solver.contact.surfaces import MasterSurface, SlaveQuadrature
 
-__all__ = ["ContactState", "NitscheContact", "Status"]
-
-
-class Status(IntEnum):
-    """Contact status of a slave quadrature point."""
-
-    OPEN = 0
-    STICK = 1
-    SLIP = 2
-
-
-@dataclass
-class ContactState:
-    """Per slave quadrature point (this rank's points) state after the last update [SI units]."""
-
-    status: npt.NDArray  #: Status values (OPEN also for points without a master partner)
-    gap: npt.NDArray  #: normal gap g [m] (nan where unpaired)
-    pressure: npt.NDArray  #: contact pressure p = -lambda_n >= 0 [Pa]
-    tangential_traction: npt.NDArray  #: friction traction lambda_t on the slave (np, 3) [Pa]
-    slip_velocity: npt.NDArray  #: ds / dt (np, 3) [m/s] (zero in quasi-static steps without dt)
-    coordinates: npt.NDArray  #: deformed slave points x (np, 3) [m]
-    weights: npt.NDArray  #: surface quadrature weights (reference configuration) [m^2]
-    normal: npt.NDArray  #: n = -n_m, the contact normal pointing out of the slave (np, 3)
-
-
-_pattern_tags = itertools.count()  # unique tags of the cached Jacobians' sparsity patterns
-
-
-def _grouped_products(key: npt.NDArray, L: npt.NDArray, R: npt.NDArray):
-    """Sum of L_q^T R_q over the points q of each group of equal ``key``.
-
-    L (q, k, m), R (q, k, n). Returns the index of each group's first point and the sums
-    (groups, m, n), groups in increasing key order: the points of a group are stacked into
-    one (k x group size) product (groups padded with zero rows to the largest).
-    """
-    order = np.argsort(key, kind="stable")
-    sorted_key = key[order]
-    starts = np.flatnonzero(np.r_[True, sorted_key[1:] != sorted_key[:-1]])
-    counts = np.diff(np.r_[starts, len(key)])
-    group = np.repeat(np.arange(len(starts)), counts)
-    position = np.arange(len(key)) - starts[group]
-    shape = (len(starts), counts.max(), L.shape[1])
-    Lp = np.zeros(shape + L.shape[2:])
-    Rp = np.zeros(shape + R.shape[2:])
-    Lp[group, position] = L[order]
-    Rp[group, position] = R[order]
-    K = Lp.reshape(len(starts), -1, L.shape[2]).transpose(0, 2, 1) @ Rp.reshape(len(starts), -1, R.shape[2])
-    return order[starts], K
+__all__ = ["NitscheContact"]
 
 
 class NitscheContact:
@@ -158,7 +109,7 @@ class NitscheContact:
         imap = V.dofmap.index_map
         self._slave_blocks = imap.local_to_global(self.slave.dofs.ravel()).reshape(self.slave.dofs.shape)
         self._sizes = (imap.size_local * 3, imap.size_global * 3)
-        self._matrices: dict[str, tuple] = {}  # cached Jacobian matrices with their COO pattern
+        self._matrices = PointMatrices(V.mesh.comm, self._sizes)  # the Jacobian's COO pattern cached
         u0 = dolfinx.fem.Function(V)
         self.dt: float | None = None
         self.set_reference(u0, None)
@@ -327,21 +278,7 @@ class NitscheContact:
             r = np.concatenate([r_s.reshape(len(idx), -1), r_m.reshape(len(idx), -1)], axis=1)
             rows.append(self._global_dofs(idx).ravel())
             vals.append((self.slave.weights[idx][:, None] * r).ravel())
-        return self._assemble_vector(rows, vals)
-
-    def _assemble_vector(self, rows, vals) -> PETSc.Vec:
-        b = dolfinx.fem.petsc.create_vector(self.V)
-        with b.localForm() as loc:
-            loc.set(0.0)
-        if rows:
-            rows, vals = np.concatenate(rows), np.concatenate(vals)
-            size = self._sizes[1]
-            touched = np.flatnonzero(np.bincount(rows, minlength=size))
-            b.setValues(touched.astype(PETSc.IntType), np.bincount(rows, vals, minlength=size)[touched],
-                        addv=PETSc.InsertMode.ADD_VALUES)
-        b.assemblyBegin()
-        b.assemblyEnd()
-        return b
+        return assemble_point_vector(self.V, self._sizes[1], rows, vals)
 
     def _tangent_rows(self, idx, E, jump, stick, slip, consistent: bool) -> npt.NDArray:
         """n dlambda_n + dlambda_t (q, 3, nd) at normal-tied points, from E = T - gamma jump.
@@ -399,7 +336,7 @@ class NitscheContact:
             slave_facet = idx // nq
             if th != 0:
                 L = np.sqrt(w)[:, None, None] * T
-                first, K = _grouped_products(slave_facet, L, L)
+                first, K = grouped_products(slave_facet, L, L)
                 blocks.append(self._global_dofs(idx[first])[:, :nsd])
                 vals.append((-th * K).ravel())
             t = np.flatnonzero(tied[idx])
@@ -411,35 +348,11 @@ class NitscheContact:
                 R = self._tangent_rows(it, E, jump, stick[it], slip[it], consistent)
                 F = w[t, None, None] * (th * T_full - gam[t, None, None] * jump)
                 key = slave_facet[t] * self.master.num_facets + self.pairing.facet[it]
-                first, K = _grouped_products(key, F, R)
+                first, K = grouped_products(key, F, R)
                 blocks.append(self._global_dofs(it[first]))
                 vals.append(K.ravel())
         vals = np.concatenate(vals) if vals else np.zeros(0)
-        cached = self._matrices.get(cache)
-        same = cached is not None and len(cached[0]) == len(blocks) and all(
-            np.array_equal(a, b) for a, b in zip(cached[0], blocks))
-        if self.V.mesh.comm.allreduce(same, op=MPI.LAND):  # the COO preallocation is collective
-            A = cached[1]
-        else:
-            A = PETSc.Mat().create(comm=self.V.mesh.comm)
-            A.setSizes((self._sizes, self._sizes), bsize=3)
-            A.setType(PETSc.Mat.Type.AIJ)
-            rows = [np.repeat(d, d.shape[1], axis=1).ravel() for d in blocks]
-            cols = [np.tile(d, (1, d.shape[1])).ravel() for d in blocks]
-            rows = np.concatenate(rows) if rows else np.zeros(0)
-            cols = np.concatenate(cols) if cols else np.zeros(0)
-            A.setPreallocationCOO(rows.astype(PETSc.IntType), cols.astype(PETSc.IntType))
-            if cache is not None:
-                if cached is not None:
-                    cached[1].destroy()
-                self._matrices[cache] = (blocks, A, next(_pattern_tags))
-        A.setValuesCOO(vals, addv=PETSc.InsertMode.INSERT_VALUES)
-        A.assemble()
-        if cache is None:
-            return A
-        J = A.copy()
-        J.setAttr("coo_pattern", self._matrices[cache][2])  # same tag: same sparsity
-        return J
+        return self._matrices.assemble(blocks, vals, cache)
 
     def jacobian(self) -> PETSc.Mat:
         """Generalized-Newton Jacobian of the contact residual at the last update [N/m]."""
@@ -470,25 +383,6 @@ class NitscheContact:
         return self._assemble_matrix(status != Status.OPEN, status == Status.STICK, np.zeros(len(status), bool),
                                      consistent=False, theta=theta, gamma=gamma)
 
-    def band_status(self, height: float, axis: int = 2) -> npt.NDArray:
-        """STICK for slave points within ``height`` [m] of the slave surface's lowest point along
-        ``axis`` (e.g. a bonded band at the TP lower edge), OPEN elsewhere (reference coordinates)."""
-        if not height >= 0:
-            raise ValueError(f"band height must be >= 0 m, got {height}")
-        z = self.slave.points[:, axis]
-        z_min = self.V.mesh.comm.allreduce(z.min() if len(z) else np.inf, op=MPI.MIN)
-        return np.where(z <= z_min + height, Status.STICK, Status.OPEN).astype(np.int8)
-
-    def touches_top(self, margin: float, axis: int = 2) -> bool:
-        """Whether a slave point within ``margin`` [m] of the slave surface's highest point along
-        ``axis`` (reference coordinates) is in contact, on any rank: the contact band has reached
-        the upper end of the surface, above which no contact is modelled."""
-        z = self.slave.points[:, axis]
-        comm = self.V.mesh.comm
-        z_max = comm.allreduce(z.max() if len(z) else -np.inf, op=MPI.MAX)
-        touching = (z >= z_max - margin) & (self.state.status != Status.OPEN)
-        return comm.allreduce(bool(touching.any()), op=MPI.LOR)
-
     def residual_floor(self) -> float:
         """Round-off level of the contact residual's l2 norm at the last update [N] (all ranks).
 
@@ -511,29 +405,3 @@ class NitscheContact:
         normal = comm.allreduce(float(w @ self.state.pressure), op=MPI.SUM)
         tangential = comm.allreduce(w @ self.state.tangential_traction, op=MPI.SUM)
         return normal, tangential
-
-    def write_surface(self, path) -> None:
-        """Write the slave points with their state as VTK PolyData (.vtp) for ParaView (rank 0 writes).
-
-        Point data: status (0 open, 1 stick, 2 slip), gap_m, pressure_Pa,
-        tangential_traction_Pa (vector), slip_velocity_m_s (vector), at the deformed points.
-        """
-        comm = self.V.mesh.comm
-        st = self.state
-        fields = {
-            "status": st.status.astype(np.int32),
-            "gap_m": st.gap,
-            "pressure_Pa": st.pressure,
-            "tangential_traction_Pa": st.tangential_traction,
-            "slip_velocity_m_s": st.slip_velocity,
-        }
-        points = comm.gather(st.coordinates, root=0)
-        data = {name: comm.gather(a, root=0) for name, a in fields.items()}
-        if comm.rank == 0:
-            import pyvista
-
-            cloud = pyvista.PolyData(np.concatenate(points))
-            for name, parts in data.items():
-                cloud.point_data[name] = np.concatenate(parts)
-            cloud.save(str(path))
-

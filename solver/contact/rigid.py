@@ -11,7 +11,7 @@ contact normal, out of the body) and for the facets tagged ``tag``:
 
 Contact pressure p = -min(P_n, 0) >= 0; friction traction = projection of P_t onto
 the disc of radius mu(|v_t|) p with the slip velocity v_t = (u - u_old)_t / dt and
-mu(v) from ``solver.friction.FrictionLaw``. The contact residual added to the bulk
+mu(v) from ``solver.contact.friction.FrictionLaw``. The contact residual added to the bulk
 equations (Chouly, Hild & Renard, theta-variant: 1 symmetric, 0 incomplete,
 -1 skew-symmetric) is
 
@@ -19,7 +19,7 @@ equations (Chouly, Hild & Renard, theta-variant: 1 symmetric, 0 incomplete,
                 - theta/gamma int s_t(u).s_t(w) + 1/gamma int [P_t]_{mu p} . (theta s_t(w) - gamma w_t),
 
 and its Jacobian is the exact UFL Gateaux derivative (generalised Newton). The object
-follows the contact interface of ``solver.contact.NitscheContact``: set_reference,
+follows the contact interface of ``solver.contact.nitsche.NitscheContact``: set_reference,
 update, residual, jacobian, state.
 """
 
@@ -36,17 +36,15 @@ from dolfinx.fem import petsc as fem_petsc
 
 from common.material import Material
 from solver.elasticity import sigma
-from solver.friction import FrictionLaw
-
-OPEN, STICK, SLIP = 0, 1, 2
-
+from solver.contact.friction import FrictionLaw
+from solver.contact.model import Status
 
 @dataclass
-class ContactState:
+class PlaneContactState:
     """Per quadrature point of the contact facets (owned facets of this rank)."""
 
     points: np.ndarray  #: reference positions (x) [m], (n, 3)
-    status: np.ndarray  #: OPEN, STICK or SLIP
+    status: np.ndarray  #: Status values (OPEN, STICK or SLIP)
     gap: np.ndarray  #: [m]
     pressure: np.ndarray  #: contact pressure, positive in compression [Pa]
     tangential_traction: np.ndarray  #: friction traction on the body [Pa], (n, gdim)
@@ -166,7 +164,7 @@ class RigidPlaneContact:
         return mesh.comm.allreduce(fem.assemble_scalar(self._forms["normal_force"]))
 
     @property
-    def state(self) -> ContactState:
+    def state(self) -> PlaneContactState:
         """Status, gap, pressure, friction traction and slip velocity at the facet quadrature points."""
         mesh = self.V.mesh
         tdim = mesh.topology.dim
@@ -187,10 +185,10 @@ class RigidPlaneContact:
         gap, pressure = gap[:, 0], pressure[:, 0]
         if friction:  # friction limit mu p versus the trial traction |P_t|
             traction, trial_norm, limit = friction[0], friction[1][:, 0], friction[2][:, 0]
-            status = np.where(pressure > 0, np.where(trial_norm < limit, STICK, SLIP), OPEN)
+            status = np.where(pressure > 0, np.where(trial_norm < limit, Status.STICK, Status.SLIP), Status.OPEN)
         else:
-            traction, status = np.zeros_like(velocity), np.where(pressure > 0, SLIP, OPEN)
-        return ContactState(np.pad(x, ((0, 0), (0, 3 - gdim))), status, gap, pressure, traction, velocity)
+            traction, status = np.zeros_like(velocity), np.where(pressure > 0, Status.SLIP, Status.OPEN)
+        return PlaneContactState(np.pad(x, ((0, 0), (0, 3 - gdim))), status, gap, pressure, traction, velocity)
 
 
 def _facet_points_in_cell(cell_type: basix.CellType, local_facet: int, degree: int) -> np.ndarray:

@@ -1,0 +1,33 @@
+"""Frictional contact: the contact model (status, state, interface), the friction law, the
+contact surfaces and their closest-point pairing, the Nitsche terms between two bodies of
+one mesh and against a rigid plane (docs/contact.md).
+
+==============  ==================================================================
+``model``       Status, ContactState, the ContactModel protocol
+``friction``    velocity-dependent Coulomb law mu(v)
+``surfaces``    master facets (gathered) and slave quadrature points of a mesh
+``pairing``     closest points of the slave points on the deformed master surface
+``nitsche``     NitscheContact: state update, residual, generalized-Newton tangent
+``assembly``    PETSc vectors and COO-cached matrices from per-point contributions
+``rigid``       RigidPlaneContact: Nitsche contact with a rigid plane, in UFL
+==============  ==================================================================
+"""
+
+from solver.contact.friction import FrictionLaw
+from solver.contact.model import ContactState, Status
+from solver.contact.nitsche import NitscheContact
+from solver.contact.pairing import Pairing, pair
+from solver.contact.rigid import RigidPlaneContact
+from solver.contact.surfaces import MasterSurface, SlaveQuadrature
+
+__all__ = [
+    "ContactState",
+    "FrictionLaw",
+    "MasterSurface",
+    "NitscheContact",
+    "Pairing",
+    "RigidPlaneContact",
+    "SlaveQuadrature",
+    "Status",
+    "pair",
+]
