@@ -4,7 +4,7 @@ Prints: DOFs and slave points; wall time of pairing + state update, residual, Ja
 interface_stiffness assembly; then one implicit step of the joint from rest (A = K + M /
 (beta dt^2), the Newmark effective stiffness at rest, axial load on the TP top) solved
 with a fresh LU factorisation at every Newton iteration (``refactor_after = 0``) and with
-the reused-factorisation GMRES strategy of ``solver.nonlinear``, with iterations,
+the reused-factorisation GMRES strategy of ``solver.dynamics.newton``, with iterations,
 factorisations and the time per phase.
 
     python benchmarks/contact_joint.py                  # default discretisation (48 around, 80 mm, P2)
@@ -39,8 +39,8 @@ from common.case import read_case  # noqa: E402
 from solver.contact import NitscheContact  # noqa: E402
 from solver.elasticity import epsilon, sigma  # noqa: E402
 from solver.contact import FrictionLaw  # noqa: E402
-from solver.modal_interface import band_status  # noqa: E402
-from solver.nonlinear import ContactNewtonSolver  # noqa: E402
+from solver.modal.interface import band_status  # noqa: E402
+from solver.dynamics.newton import ContactNewtonSolver  # noqa: E402
 
 
 def timed(comm, f):
@@ -65,7 +65,7 @@ def main(argv=None) -> int:
     p.add_argument("--max-backtracks", type=int, default=0, help="Newton step halvings (line search)")
     p.add_argument("--rho-inf", type=float, default=0.8, help="generalised-alpha spectral radius (--self-weight)")
     p.add_argument("--max-gap-change", type=float, default=None,
-                   help="limit of a point's gap change per Newton iteration [m] (solver.nonlinear)")
+                   help="limit of a point's gap change per Newton iteration [m] (solver.dynamics.newton)")
     p.add_argument("--lagged-friction", action="store_true")
     p.add_argument("--self-weight", type=float, default=0.0, metavar="T",
                    help="run the dynamic self-weight ramp of T seconds instead [s]")
@@ -158,10 +158,10 @@ def main(argv=None) -> int:
 
 def self_weight(a, V, data, joint, material, contact) -> int:
     """Dynamic self-weight ramp (solver.dynamics) with this contact; prints one line per step."""
-    from solver.damping import RayleighDamping
-    from solver.dynamics import Elastodynamics, Settlement, assemble_structure, run
-    from solver.loads import RampedAxialForce, TopFaceLoad, TPLoading
-    from solver.newmark import GeneralisedAlpha
+    from solver.dynamics.damping import RayleighDamping
+    from solver.dynamics.elastodynamics import Elastodynamics, Settlement, assemble_structure, run
+    from solver.dynamics.loads import RampedAxialForce, TopFaceLoad, TPLoading
+    from solver.dynamics.schemes import GeneralisedAlpha
 
     comm = V.mesh.comm
     clamped = dolfinx.fem.locate_dofs_topological(V, 2, data.facet_tags.find(tags.MP_CLAMPED))

@@ -17,7 +17,7 @@ assembly, factorisation, linear solves, bulk vectors, other; ``benchmarks/phase_
 where the ramp stopped). ``--save-displacement`` writes the final displacement per rank
 (to compare two versions of the code). The installation demo's contact settings are
 ``--theta -1 --gamma0 1 --max-gap-change 1e-5 --backtracks 4 --rho-inf 0 --lagged-friction``.
-The bulk away from the contact surfaces is condensed (``solver/condensation.py``;
+The bulk away from the contact surfaces is condensed (``solver/dynamics/condensation.py``;
 ``--no-condense-bulk`` to compare). The issue-4 target run (27.3 min on 2 idle cores, session 11):
 
     mpirun -n 2 python benchmarks/dynamics_joint.py --theta -1 --gamma0 1 --max-gap-change 1e-5 \
@@ -42,15 +42,15 @@ from dolfinx import fem  # noqa: E402
 from geometry import tags  # noqa: E402
 from geometry.mesh import create_joint_mesh  # noqa: E402
 from geometry.parameters import MeshOptions, load_geometry  # noqa: E402
-from solver import checkpoint  # noqa: E402
+from solver.installation import checkpoint  # noqa: E402
 from common.case import resolve_case_path  # noqa: E402
 from solver.contact import NitscheContact  # noqa: E402
-from solver.damping import RayleighDamping  # noqa: E402
-from solver.dynamics import ContactZoneGuard, Elastodynamics, Settlement, assemble_structure, run  # noqa: E402
+from solver.dynamics.damping import RayleighDamping  # noqa: E402
+from solver.dynamics.elastodynamics import ContactZoneGuard, Elastodynamics, Settlement, assemble_structure, run  # noqa: E402
 from solver.contact import FrictionLaw  # noqa: E402
-from solver.loads import RampedAxialForce, Schedule, Stage, TopFaceLoad, TPLoading  # noqa: E402
-from solver.modal import clamp  # noqa: E402
-from solver.newmark import GeneralisedAlpha  # noqa: E402
+from solver.dynamics.loads import RampedAxialForce, Schedule, Stage, TopFaceLoad, TPLoading  # noqa: E402
+from solver.modal.eigen import clamp  # noqa: E402
+from solver.dynamics.schemes import GeneralisedAlpha  # noqa: E402
 
 from phase_timer import PhaseTimer  # noqa: E402
 
@@ -82,11 +82,11 @@ def main(argv=None) -> int:
                    help="contact zone (and contact surfaces) up to this height above the TP's lower edge [m]")
     p.add_argument("--degree", type=int, default=2)
     p.add_argument("--condense-bulk", action=argparse.BooleanOptionalAction, default=True,
-                   help="Newton on the contact zone with the linear bulk condensed (solver.condensation)")
+                   help="Newton on the contact zone with the linear bulk condensed (solver.dynamics.condensation)")
     p.add_argument("--partition", choices=("sectors", "graph"), default="sectors",
                    help="parallel distribution of the cells (geometry.parameters.MeshOptions)")
     p.add_argument("--newton-rtol", type=float, default=None,
-                   help="relative Newton tolerance (default: solver.nonlinear's)")
+                   help="relative Newton tolerance (default: solver.dynamics.newton's)")
     p.add_argument("--mu", type=float, nargs=2, default=(0.5, 0.4), metavar=("MU_S", "MU_D"))
     p.add_argument("--d-c", type=float, default=100.0, help="friction decay [s/m]")
     p.add_argument("--gamma0", type=float, default=10.0)
@@ -104,10 +104,10 @@ def main(argv=None) -> int:
     p.add_argument("--lagged-friction", action="store_true", help="mu from the previous step's slip speed")
     p.add_argument("--backtracks", type=int, default=4, help="Newton step halvings when ||F|| grows")
     p.add_argument("--no-reversal-limit", action="store_true",
-                   help="Newton steps may reverse a slipping point's friction (solver.nonlinear)")
+                   help="Newton steps may reverse a slipping point's friction (solver.dynamics.newton)")
     p.add_argument("--stall-iterations", type=int, default=None,
                    help="give up a Newton attempt when its smallest ||F|| is this many iterations old "
-                        "(default: solver.nonlinear's)")
+                        "(default: solver.dynamics.newton's)")
     p.add_argument("--refactor-after", type=int, default=25,
                    help="GMRES iterations before refactorising A + J_c (0: LU every Newton iteration)")
     p.add_argument("--lu-solver", choices=("mumps", "superlu_dist"), default="mumps",
@@ -115,7 +115,7 @@ def main(argv=None) -> int:
     p.add_argument("--krylov-rtol", type=float, default=1e-11, help="tightest GMRES tolerance of the Newton corrections")
     p.add_argument("--forcing-max", type=float, default=None,
                    help="largest GMRES tolerance (Eisenstat-Walker; 0: every correction to --krylov-rtol; "
-                        "default: solver.nonlinear's)")
+                        "default: solver.dynamics.newton's)")
     p.add_argument("--max-steps", type=int, default=0, help="stop each stage after this many steps (0: no limit)")
     p.add_argument("--quick", action="store_true", help="short stages (smoke run)")
     p.add_argument("--output", default="output/dynamics_joint")

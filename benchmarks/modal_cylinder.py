@@ -6,7 +6,7 @@ Cylinder: mid-surface radius 0.297 m, wall 6 mm, length 1.4 m, steel (E = 210 GP
 nu = 0.3, rho = 7850 kg/m^3), clamped at z = 0, meshed by geometry/. For each
 discretisation (elements around, axial size, layers through the wall, degree) the
 lowest frequency of m = 2, 3, 4 is compared with the Sanders-Koiter Rayleigh-Ritz
-value (solver/cylinder_shell.py, 14 Legendre terms). Prints a markdown table.
+value (solver/reduced/cylinder_shell.py, 14 Legendre terms). Prints a markdown table.
 """
 
 import sys
@@ -23,10 +23,10 @@ from mpi4py import MPI  # noqa: E402
 from geometry import tags  # noqa: E402
 from geometry.mesh import create_tube_mesh  # noqa: E402
 from geometry.parameters import ConePart, MeshOptions  # noqa: E402
-from solver.cylinder_shell import cylinder_frequencies  # noqa: E402
+from solver.reduced.cylinder_shell import cylinder_frequencies  # noqa: E402
 from common.material import Material  # noqa: E402
-from solver.modal import EigenOptions, clamp, modal_analysis  # noqa: E402
-from solver.modes import classify  # noqa: E402
+from solver.modal.eigen import EigenOptions, clamp, modal_analysis  # noqa: E402
+from solver.modal.classify import classify  # noqa: E402
 
 R, H, L = 0.297, 0.006, 1.4
 STEEL = Material(E=210e9, nu=0.3, rho=7850.0)

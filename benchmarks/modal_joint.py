@@ -27,8 +27,8 @@ import numpy as np  # noqa: E402
 from mpi4py import MPI  # noqa: E402
 
 from common.case import read_case  # noqa: E402
-from solver.modal_joint import JointCase, joint_modes  # noqa: E402
-from solver.modes import classify  # noqa: E402
+from solver.modal.joint import JointCase, joint_modes  # noqa: E402
+from solver.modal.classify import classify  # noqa: E402
 from geometry import tags  # noqa: E402
 
 REFINEMENTS = [  # (label, overrides) -- the first one is the default discretisation

@@ -1,7 +1,7 @@
 """Wall time per phase of the contact time step, by instrumenting solver methods (benchmarks only).
 
 ``PhaseTimer.install()`` wraps, at class level, the methods that make up a step of
-``solver.dynamics.Elastodynamics`` with contact and accumulates *exclusive* wall
+``solver.dynamics.elastodynamics.Elastodynamics`` with contact and accumulates *exclusive* wall
 time (a phase nested in another is not counted twice) per phase:
 
     pairing            solver.contact.pairing.pair (closest-point projection)
@@ -10,7 +10,7 @@ time (a phase nested in another is not counted twice) per phase:
     contact jacobian   NitscheContact.jacobian (+ Dirichlet row zeroing, copy into A + J)
     factorisation      ContactNewtonSolver._factorise (A + J_c copy and LU)
     linear solves      ContactNewtonSolver._correction without the factorisation (GMRES)
-    condensation       solver.condensation.BulkCondensation: building it (once per operator),
+    condensation       solver.dynamics.condensation.BulkCondensation: building it (once per operator),
                        the condensed load and the recovery of the bulk (one bulk solve each per step)
     bulk vectors       Elastodynamics._effective_load, load evaluation, Newmark update, A u
     other              the rest of Elastodynamics.step
@@ -23,10 +23,10 @@ import functools
 import time
 from collections import defaultdict
 
-import solver.condensation
 import solver.contact.nitsche
-import solver.dynamics
-import solver.nonlinear
+import solver.dynamics.condensation
+import solver.dynamics.elastodynamics
+import solver.dynamics.newton
 
 PHASES = ["pairing", "contact update", "contact residual", "contact jacobian", "factorisation",
           "linear solves", "condensation", "bulk vectors", "other"]
@@ -71,7 +71,7 @@ class PhaseTimer:
         self._undo.append((owner, name, original))
 
     def install(self) -> "PhaseTimer":
-        NC, CN, ED = solver.contact.nitsche.NitscheContact, solver.nonlinear.ContactNewtonSolver, solver.dynamics.Elastodynamics
+        NC, CN, ED = solver.contact.nitsche.NitscheContact, solver.dynamics.newton.ContactNewtonSolver, solver.dynamics.elastodynamics.Elastodynamics
         self._wrap(ED, "step", "other")
         self._wrap(solver.contact.nitsche, "pair", "pairing")
         self._wrap(NC, "update", "contact update")
@@ -80,7 +80,7 @@ class PhaseTimer:
         self._wrap(CN, "_factorise", "factorisation")
         self._wrap(CN, "_correction", "linear solves")
         for name in ("__init__", "reduce_load", "recover"):
-            self._wrap(solver.condensation.BulkCondensation, name, "condensation")
+            self._wrap(solver.dynamics.condensation.BulkCondensation, name, "condensation")
         for name in ("_effective_load", "_evaluate_load", "_assemble_operator"):
             self._wrap(ED, name, "bulk vectors")
         self._count_gmres(CN)

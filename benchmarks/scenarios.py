@@ -1,9 +1,9 @@
 """SPEC 5 vibration scenarios on the joint: frequency- against amplitude-driven settlement.
 
-From one settled state the run branches (state saved with solver.checkpoint):
+From one settled state the run branches (state saved with solver.installation.checkpoint):
 
 1. self-weight stage of the case (10 kN ramp), then the modal stage of the settled joint
-   (solver.installation.settled_modes, ranking by solver.modal_report.describe_modes) and
+   (solver.installation.runner.settled_modes, ranking by solver.modal.ranking.describe_modes) and
    the frequency choice of the installation run (choose_frequencies: best-ranked natural
    frequency f_r, non-modal control f_c);
 2. lead-in: ``--lead-in`` s (rounded to whole periods) at f_c with the amplitude A
@@ -41,10 +41,11 @@ from common import backend  # noqa: E402,F401
 import numpy as np  # noqa: E402
 from mpi4py import MPI  # noqa: E402
 
-from solver import checkpoint, report  # noqa: E402
+from solver.installation import checkpoint
+from solver.post import report  # noqa: E402
 from common.case import read_case  # noqa: E402
-from solver.dynamics import Observer, run  # noqa: E402
-from solver.installation import (  # noqa: E402
+from solver.dynamics.elastodynamics import Observer, run  # noqa: E402
+from solver.installation.runner import (  # noqa: E402
     InstallationCase,
     JointModel,
     attach_vibration,
@@ -52,9 +53,9 @@ from solver.installation import (  # noqa: E402
     choose_frequencies,
     settled_modes,
 )
-from solver.loads import Schedule, Stage  # noqa: E402
-from solver.modal_report import JointParts, describe_modes  # noqa: E402
-from solver.demo_cli import COARSE_FRICTIONAL  # noqa: E402  (the default run's joint and contact settings)
+from solver.dynamics.loads import Schedule, Stage  # noqa: E402
+from solver.modal.ranking import JointParts, describe_modes  # noqa: E402
+from solver.installation.cli import COARSE_FRICTIONAL  # noqa: E402  (the default run's joint and contact settings)
 
 @dataclass
 class SettledJoint:

@@ -4,11 +4,11 @@ The joint, self-weight stage and durations of tests/test_install_vibration.py (1
 lead-in, 0.05 s branches) and the frequencies of benchmarks/scenarios.py (``settle``: modal
 stage, the best-ranked natural frequency f_r and the non-modal control f_c as the installation
 run chooses them), then a lead-in of ``--lead-in`` s at (f_c, A) that brings the joint to the
-depth at which it holds A. From that state (solver.checkpoint) one branch per factor k of
+depth at which it holds A. From that state (solver.installation.checkpoint) one branch per factor k of
 ``--factors``: ``--duration`` s at f_c with the amplitude k A.
 
 Per branch: the settlement gained [mm], over the stage's second half [mm] (the sustained part,
-as in the installation summary), and whether the event stabilised (solver.report.stabilised:
+as in the installation summary), and whether the event stabilised (solver.post.report.stabilised:
 the last 20 % adds < 5 % of the gain). A branch is amplitude-driven when it gains more than 5
 times the branch at k = 1 (the scenario tests' SPEC 5.3 criterion); the threshold lies between
 the largest factor below the first amplitude-driven branch and that branch's factor. SPEC 5.2
@@ -34,8 +34,9 @@ from common import backend  # noqa: E402,F401
 from mpi4py import MPI  # noqa: E402
 
 from benchmarks.scenarios import gain, harmonic_stage, late_gain, settle  # noqa: E402
-from solver import checkpoint, report  # noqa: E402
-from solver.demo_cli import COARSE_FRICTIONAL  # noqa: E402
+from solver.installation import checkpoint
+from solver.post import report  # noqa: E402
+from solver.installation.cli import COARSE_FRICTIONAL  # noqa: E402
 
 AMPLITUDE_DRIVEN = 5.0  #: a branch gaining more than this x the gain at A is amplitude-driven [-]
 #: the self-weight stage of the scenario tests (tests/test_install_vibration.py): 1 s ramp

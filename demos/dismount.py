@@ -32,8 +32,8 @@ from common import backend  # noqa: F401,E402  (before dolfinx)
 
 from mpi4py import MPI  # noqa: E402
 
-from solver import demo_cli  # noqa: E402
-from solver.dismount import (  # noqa: E402
+from solver.installation import cli as demo_cli  # noqa: E402
+from solver.installation.dismount import (  # noqa: E402
     DismountPlan,
     dismount_case,
     dismount_table,

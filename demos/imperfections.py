@@ -41,7 +41,7 @@ from mpi4py import MPI  # noqa: E402
 from geometry.contact_map import plot_contact_map, rigid_contact_map  # noqa: E402
 from geometry.imperfections import DeviationMap, ovality, read_imperfection  # noqa: E402
 from geometry.parameters import ConePart  # noqa: E402
-from solver import demo_cli  # noqa: E402
+from solver.installation import cli as demo_cli  # noqa: E402
 
 DEFAULT = demo_cli.COARSE_FRICTIONAL + ["vibration.n_modes=20", "vibration.stage_duration_s=0.03",
                                         "vibration.modal_stage=false"]

@@ -22,9 +22,9 @@ from common import backend  # noqa: F401,E402  (before dolfinx)
 
 from mpi4py import MPI  # noqa: E402
 
-from solver import demo_cli  # noqa: E402
+from solver.installation import cli as demo_cli  # noqa: E402
 from common.case import read_case  # noqa: E402
-from solver.installation import Installation, InstallationCase  # noqa: E402
+from solver.installation.runner import Installation, InstallationCase  # noqa: E402
 
 #: --quick: coarse mesh, a fast self-weight ramp, no lead-in, short stages and frictionless
 #: contact (a smoke run of every stage and output; with friction, Newton stalls on this coarse
@@ -47,7 +47,7 @@ QUICK = [
 ]
 
 #: the default run (no options): the coarse frictional joint shared by the demos
-#: (solver.demo_cli.COARSE_FRICTIONAL: 8 around, 0.25 m, 10 mm axially in the contact zone,
+#: (solver.installation.cli.COARSE_FRICTIONAL: 8 around, 0.25 m, 10 mm axially in the contact zone,
 #: the contact settings that converge on it), 0.05 s vibration stages and 20 modes, so that
 #: it finishes in reasonable time on 2 cores; --full uses the case file as written. The
 #: best-ranked mode below the case's 300 Hz (the TP's m = 1 pair, 142 Hz on this mesh), the

@@ -28,8 +28,8 @@ import numpy as np  # noqa: E402
 
 from geometry.parameters import JointGeometry, load_geometry  # noqa: E402
 from solver.contact import FrictionLaw  # noqa: E402
-from solver.lumped import GRAVITY, AxialLoad, LumpedModel, simulate  # noqa: E402
-from solver.shell import JointStiffness, joint_stiffness  # noqa: E402
+from solver.reduced.lumped import GRAVITY, AxialLoad, LumpedModel, simulate  # noqa: E402
+from solver.reduced.shell import JointStiffness, joint_stiffness  # noqa: E402
 
 #: SPEC 7 sensitivity cases: (alpha [deg], beta [deg], mu_d)
 SENSITIVITY_CASES = (

@@ -27,8 +27,9 @@ from common import backend  # noqa: F401,E402  (before dolfinx)
 
 from mpi4py import MPI  # noqa: E402
 
-from solver import demo_cli, report  # noqa: E402
-from solver.parameter_study import (  # noqa: E402
+from solver.installation import cli as demo_cli  # noqa: E402
+from solver.post import report  # noqa: E402
+from solver.installation.parameter_study import (  # noqa: E402
     SUMMARY_COLUMNS,
     plot_summary,
     select,

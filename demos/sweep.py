@@ -32,8 +32,9 @@ from dataclasses import asdict  # noqa: E402
 
 from mpi4py import MPI  # noqa: E402
 
-from solver import demo_cli, report  # noqa: E402
-from solver.loads import frequency_ramp, frequency_steps  # noqa: E402
+from solver.installation import cli as demo_cli  # noqa: E402
+from solver.post import report  # noqa: E402
+from solver.dynamics.loads import frequency_ramp, frequency_steps  # noqa: E402
 
 DEFAULT = demo_cli.COARSE_FRICTIONAL + ["vibration.n_modes=20"]
 #: per sweep kind: f_start, f_stop [Hz], then f_step [Hz] and dwell [s] or the ramp duration [s]

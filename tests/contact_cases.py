@@ -199,7 +199,7 @@ def sliding_block(
     from solver.contact import NitscheContact, Status
     from common.material import Material
     from solver.elasticity import epsilon, sigma
-    from solver.nonlinear import ContactNewtonSolver
+    from solver.dynamics.newton import ContactNewtonSolver
 
     H, q = 0.25, 1e6
     mesh, cell_tags, tags = two_blocks(comm, heights=(H, H), lower=(4, 4, 2), upper=(3, 3, 2), inset=0.25)

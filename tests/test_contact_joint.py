@@ -23,11 +23,11 @@ from geometry.mesh import create_joint_mesh
 from geometry.parameters import MeshOptions, geometry_from_case
 from common.case import read_case
 from solver.contact import NitscheContact, Status
-from solver.damping import RayleighDamping
-from solver.dynamics import Elastodynamics, Settlement, assemble_structure, run
+from solver.dynamics.damping import RayleighDamping
+from solver.dynamics.elastodynamics import Elastodynamics, Settlement, assemble_structure, run
 from solver.contact import FrictionLaw
-from solver.loads import RampedAxialForce, TopFaceLoad, TPLoading
-from solver.newmark import GeneralisedAlpha
+from solver.dynamics.loads import RampedAxialForce, TopFaceLoad, TPLoading
+from solver.dynamics.schemes import GeneralisedAlpha
 
 pytestmark = pytest.mark.mpi
 

@@ -16,7 +16,7 @@ from contact_cases import MASTER, SLAVE, elastic_system, fixed, gathered, two_ri
 from solver.contact import NitscheContact, Status
 from common.material import Material
 from solver.contact import FrictionLaw
-from solver.nonlinear import solve_contact_problem
+from solver.dynamics.newton import solve_contact_problem
 
 pytestmark = pytest.mark.mpi
 

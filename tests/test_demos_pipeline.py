@@ -6,7 +6,7 @@ degree 2, frictionless as in tests/test_install_pipeline.py):
   by A / tan(alpha) (it touches first where it is narrowest; closed form);
 * a dismount pull through ``[static_force]``: the history's axial force is the piecewise-linear
   static force at every step, and without friction the pull lifts the TP off the MP (settlement
-  decreases, the contact normal force drops to zero), which ``solver.dismount`` reports.
+  decreases, the contact normal force drops to zero), which ``solver.installation.dismount`` reports.
 """
 
 import math
@@ -18,8 +18,8 @@ from mpi4py import MPI
 
 from geometry import tags
 from common.case import read_case
-from solver.dismount import DismountPlan, dismount_case, dismount_table
-from solver.installation import Installation, InstallationCase, build_joint_model
+from solver.installation.dismount import DismountPlan, dismount_case, dismount_table
+from solver.installation.runner import Installation, InstallationCase, build_joint_model
 
 pytestmark = pytest.mark.mpi
 

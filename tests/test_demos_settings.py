@@ -11,8 +11,8 @@ from mpi4py import MPI
 from geometry.contact_map import tp_placement
 from geometry.imperfections import ovality
 from common.case import read_case
-from solver.installation import Excitation, InstallationCase, _schedule_excitations
-from solver.loads import (
+from solver.installation.runner import Excitation, InstallationCase, _schedule_excitations
+from solver.dynamics.loads import (
     PiecewiseLinearForce,
     RampedAxialForce,
     Schedule,
@@ -164,7 +164,7 @@ def test_imperfection_setting_gives_the_deviation_and_placement(tmp_path_factory
 
 
 def test_dismount_case_sequence():
-    from solver.dismount import DismountPlan, dismount_case
+    from solver.installation.dismount import DismountPlan, dismount_case
 
     plan = DismountPlan(pull_N=30e3, ramp_s=0.05, hold_s=0.1, n_install=2, n_frequencies=3,
                         stage_duration_s=0.1, amplitude_N=3600.0)
@@ -190,7 +190,7 @@ def test_dismount_case_sequence():
 def test_dismount_table_motion_and_separation():
     """Synthetic history: the TP goes up 0.5 mm in the pull stage but keeps contact, then
     rises 3 mm with zero normal force."""
-    from solver.dismount import dismount_table
+    from solver.installation.dismount import dismount_table
 
     def row(stage, t, s, normal, contact):
         return {"stage": stage, "time_s": t, "settlement_mm": s, "normal_force_N": normal,
@@ -212,7 +212,7 @@ def test_dismount_table_motion_and_separation():
 
 
 def test_parameter_study_varies_one_thing_at_a_time():
-    from solver.parameter_study import select, variants
+    from solver.installation.parameter_study import select, variants
 
     study = variants(0.25)
     base = _case()

@@ -1,4 +1,4 @@
-"""Static condensation of the linear bulk (solver.condensation) against the uncondensed system.
+"""Static condensation of the linear bulk (solver.dynamics.condensation) against the uncondensed system.
 
 The coarse joint of the installation tests (8 around, 0.25 m axially, 10 mm in the contact zone,
 P2, one element through the wall; contact surfaces: the cone walls inside the zone).
@@ -29,13 +29,13 @@ from geometry import tags
 from geometry.mesh import create_joint_mesh
 from geometry.parameters import MeshOptions, geometry_from_case
 from common.case import read_case
-from solver.condensation import BulkCondensation
+from solver.dynamics.condensation import BulkCondensation
 from solver.contact import NitscheContact
-from solver.damping import RayleighDamping
-from solver.dynamics import Elastodynamics, Settlement, assemble_structure, run
+from solver.dynamics.damping import RayleighDamping
+from solver.dynamics.elastodynamics import Elastodynamics, Settlement, assemble_structure, run
 from solver.contact import FrictionLaw
-from solver.loads import RampedAxialForce, TopFaceLoad, TPLoading
-from solver.newmark import GeneralisedAlpha
+from solver.dynamics.loads import RampedAxialForce, TopFaceLoad, TPLoading
+from solver.dynamics.schemes import GeneralisedAlpha
 
 pytestmark = pytest.mark.mpi
 

@@ -12,7 +12,7 @@ from dolfinx import fem
 from geometry import tags
 from geometry.mesh import create_tube_mesh
 from geometry.parameters import ConePart, MeshOptions
-from solver.loads import (PointLoad, RampedAxialForce, Schedule, Stage, TopFaceLoad, TPLoading,
+from solver.dynamics.loads import (PointLoad, RampedAxialForce, Schedule, Stage, TopFaceLoad, TPLoading,
                           eccentric_amplitude, shaker_point)
 
 pytestmark = pytest.mark.mpi
@@ -158,7 +158,7 @@ def test_point_outside_the_body_raises(tube):
 
 
 def test_rayleigh_from_case_table():
-    from solver.damping import RayleighDamping, rayleigh_from_dict
+    from solver.dynamics.damping import RayleighDamping, rayleigh_from_dict
 
     assert rayleigh_from_dict({"zeta": 0.01, "frequency_hz": 120.0}) == RayleighDamping.at_frequency(0.01, 120.0)
     two = rayleigh_from_dict({"kind": "rayleigh", "zeta": [0.01, 0.02], "frequency_hz": [50.0, 200.0]})

@@ -14,7 +14,7 @@ from geometry import tags
 from geometry.mesh import create_joint_mesh
 from geometry.parameters import MeshOptions, load_geometry
 from common.case import resolve_case_path
-from solver.dynamics import Settlement, StepResult, run
+from solver.dynamics.elastodynamics import Settlement, StepResult, run
 
 pytestmark = pytest.mark.mpi
 

@@ -14,10 +14,10 @@ from slepc4py import SLEPc
 from dolfinx import fem, mesh
 from dolfinx.fem.petsc import set_bc
 
-from solver.damping import ModalDamping, RayleighDamping
-from solver.dynamics import Elastodynamics, assemble_structure, run
+from solver.dynamics.damping import ModalDamping, RayleighDamping
+from solver.dynamics.elastodynamics import Elastodynamics, assemble_structure, run
 from common.material import Material
-from solver.newmark import GeneralisedAlpha, QuasiStatic
+from solver.dynamics.schemes import GeneralisedAlpha, QuasiStatic
 
 pytestmark = pytest.mark.mpi
 
@@ -227,7 +227,7 @@ def test_generalised_alpha_damps_unresolved_modes(beam, modes, rho_inf):
 
 
 def test_scheme_names():
-    from solver.newmark import scheme_from_name
+    from solver.dynamics.schemes import scheme_from_name
 
     assert scheme_from_name("newmark") == GeneralisedAlpha()
     assert scheme_from_name("generalised-alpha", rho_inf=0.5) == GeneralisedAlpha.from_spectral_radius(0.5)

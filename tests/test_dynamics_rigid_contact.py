@@ -22,11 +22,11 @@ from scipy.integrate import solve_ivp
 from dolfinx import fem, mesh
 from dolfinx.fem.petsc import assemble_vector
 
-from solver.dynamics import Elastodynamics, assemble_structure, run
+from solver.dynamics.elastodynamics import Elastodynamics, assemble_structure, run
 from common.material import Material
 from solver.contact import FrictionLaw
-from solver.loads import TopFaceLoad
-from solver.newmark import GeneralisedAlpha, QuasiStatic
+from solver.dynamics.loads import TopFaceLoad
+from solver.dynamics.schemes import GeneralisedAlpha, QuasiStatic
 from solver.probes import PointProbe
 from solver.contact import RigidPlaneContact, Status
 

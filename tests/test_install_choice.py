@@ -3,9 +3,9 @@
 import numpy as np
 import pytest
 
-from solver.installation import VibrationSettings, choose_frequencies
-from solver.mode_indicators import resonant_slip
-from solver.modal_report import ModeRecord
+from solver.installation.runner import VibrationSettings, choose_frequencies
+from solver.modal.indicators import resonant_slip
+from solver.modal.ranking import ModeRecord
 
 pytestmark = pytest.mark.mpi
 

@@ -1,20 +1,20 @@
 """SPEC 5.5 (dismount) and 5.7 (fast sweep) on the coarse joint, branched from one settled state.
 
-The joint of the default installation run (solver.demo_cli.COARSE_FRICTIONAL: 8 elements around,
+The joint of the default installation run (solver.installation.cli.COARSE_FRICTIONAL: 8 elements around,
 0.25 m axially, 10 mm in the contact zone, P2, 16 steps per excitation period), settled by the
 10 kN self-weight ramped over 0.5 s in 10 ms steps (12 periods of the TP's 24 Hz axial
 oscillation on the wedge, so the ramp is slow for the TP; half the ramp of
-tests/test_install_scenarios.py to keep the test short), saved with solver.checkpoint.
+tests/test_install_scenarios.py to keep the test short), saved with solver.installation.checkpoint.
 f_r is the best-ranked natural frequency of the settled joint below the case's 300 Hz limit
 (choose_frequencies, as the installation run: the TP's m = 1 pair, 142 Hz); A = 3.6 kN
 (SPEC 3 reference amplitude) at the TP's top edge (eccentric forcing).
 
 * SPEC 5.5, dismount: the axial force is ramped from the 10 kN push to a pull P over 0.05 s and
-  held for 0.05 s (solver.dismount.DismountPlan): the pull alone moves the TP up by less than
+  held for 0.05 s (solver.installation.dismount.DismountPlan): the pull alone moves the TP up by less than
   1 mm and the contact stays closed; then P plus A at f_r for at most 0.05 s separates the TP:
   "separated" = the TP is above its first-contact position (it moved up by more than its
   settlement; perfect cones cannot touch there) and the contact normal force is below 1 % of
-  the settled one N (solver.dismount's criterion). P lies halfway between the rigid Coulomb
+  the settled one N (solver.installation.dismount's criterion). P lies halfway between the rigid Coulomb
   pull-out forces N (mu cos(alpha) - sin(alpha)) with mu_d (the pull alone stays below it) and
   with mu_s minus A (the peak pull P + A exceeds it): of the order of the self-weight force
   (measured 7.88 kN; 8.56 / 10.80 kN pull-out forces of N = 22.4 kN). Measured: the pull alone
@@ -47,13 +47,13 @@ import numpy as np
 import pytest
 from mpi4py import MPI
 
-from solver import checkpoint
+from solver.installation import checkpoint
 from common.case import read_case
 from solver.contact import Status
-from solver.demo_cli import COARSE_FRICTIONAL
-from solver.dismount import DismountPlan, pull_out_force
-from solver.dynamics import run
-from solver.installation import (
+from solver.installation.cli import COARSE_FRICTIONAL
+from solver.installation.dismount import DismountPlan, pull_out_force
+from solver.dynamics.elastodynamics import run
+from solver.installation.runner import (
     InstallationCase,
     StaticForceSettings,
     attach_vibration,
@@ -61,8 +61,8 @@ from solver.installation import (
     choose_frequencies,
     settled_modes,
 )
-from solver.loads import Schedule, Stage, frequency_ramp
-from solver.modal_report import JointParts, describe_modes
+from solver.dynamics.loads import Schedule, Stage, frequency_ramp
+from solver.modal.ranking import JointParts, describe_modes
 
 pytestmark = pytest.mark.mpi
 

@@ -7,7 +7,7 @@ import pytest
 from mpi4py import MPI
 
 from common.case import read_case
-from solver.installation import InstallationCase
+from solver.installation.runner import InstallationCase
 
 pytestmark = pytest.mark.mpi
 
@@ -120,7 +120,7 @@ def test_demo_rejects_bad_options_before_computing(tmp_path_factory, capsys):
 def test_resume_needs_the_same_rank_count(tmp_path_factory):
     import json
 
-    from solver import checkpoint
+    from solver.installation import checkpoint
 
     comm = MPI.COMM_WORLD
     folder = comm.bcast(str(tmp_path_factory.mktemp("ckpt")) if comm.rank == 0 else None, root=0)
@@ -138,7 +138,7 @@ def test_resume_needs_a_complete_checkpoint(tmp_path_factory):
     import json
     from types import SimpleNamespace
 
-    from solver import checkpoint
+    from solver.installation import checkpoint
 
     comm = MPI.COMM_WORLD
     folder = Path(comm.bcast(str(tmp_path_factory.mktemp("old_ckpt")) if comm.rank == 0 else None, root=0))

@@ -17,8 +17,8 @@ import pytest
 from mpi4py import MPI
 
 from common.case import read_case
-from solver.demo_cli import COARSE_FRICTIONAL
-from solver.installation import Installation, InstallationCase
+from solver.installation.cli import COARSE_FRICTIONAL
+from solver.installation.runner import Installation, InstallationCase
 
 pytestmark = pytest.mark.mpi
 

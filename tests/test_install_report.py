@@ -6,8 +6,8 @@ from types import SimpleNamespace
 import numpy as np
 import pytest
 
-from solver.installation import Excitation
-from solver.report import (SELECTIVE, format_selectivity, format_stabilisation,
+from solver.installation.runner import Excitation
+from solver.post.report import (SELECTIVE, format_selectivity, format_stabilisation,
                            frequency_selectivity, late_gain, stabilised, stage_summary)
 
 

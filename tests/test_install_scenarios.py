@@ -1,6 +1,6 @@
 """SPEC 5 observations reproduced by the joint model: scenario tests on a coarse joint.
 
-The joint of the default installation run (solver.demo_cli.COARSE_FRICTIONAL): 8 elements
+The joint of the default installation run (solver.installation.cli.COARSE_FRICTIONAL): 8 elements
 around, 0.25 m axially, 10 mm axially in the contact zone around the TP's lower edge, P2,
 skew-symmetric Nitsche with gamma0 = 1, gap-limited Newton steps, generalised-alpha
 rho_inf = 0; self-weight 10 kN ramped over 1 s
@@ -11,13 +11,13 @@ the TP slides steadily instead of in stick-slip steps (measured: rate 1.41 mm/s 
 a 2 s ramp).
 
 * SPEC 5.1: under the slowly increasing axial load the TP settles in stick-slip steps:
-  several stick -> slip transitions of the TP as a whole (solver.report.stick_slip_events),
+  several stick -> slip transitions of the TP as a whole (solver.post.report.stick_slip_events),
   with intervals at rest in between.
 * SPEC 5.6 (first half): lower friction (mu_s/mu_d = 0.0625/0.05) settles more under the
   same load than the reference friction (0.5/0.4) (compared at a quarter of the ramp: the
   low-friction run needs many Newton iterations per step later in the ramp).
 * SPEC 5.8: the natural frequencies of the settled joint (contact tangent of the current
-  contact set, solver.installation.settled_modes) rise with settlement: the lowest modes at
+  contact set, solver.installation.runner.settled_modes) rise with settlement: the lowest modes at
   the end of the ramp lie above those at half the load.
 
 The vibration scenarios are tests/test_install_vibration.py (SPEC 5.2, 5.3; opt-in with
@@ -30,10 +30,10 @@ import pytest
 from mpi4py import MPI
 
 from common.case import read_case
-from solver.demo_cli import COARSE_FRICTIONAL
-from solver.dynamics import run
-from solver.installation import InstallationCase, build_joint_model, settled_modes
-from solver.report import stick_slip_events
+from solver.installation.cli import COARSE_FRICTIONAL
+from solver.dynamics.elastodynamics import run
+from solver.installation.runner import InstallationCase, build_joint_model, settled_modes
+from solver.post.report import stick_slip_events
 
 pytestmark = pytest.mark.mpi
 

@@ -1,14 +1,14 @@
 """SPEC 5.2/5.3/5.6 vibration scenarios on the coarse joint: frequency- and amplitude-driven
 settlement, and the friction decay d_c.
 
-The joint and self-weight stage of tests/test_install_scenarios.py (solver.demo_cli.
+The joint and self-weight stage of tests/test_install_scenarios.py (solver.installation.cli.
 COARSE_FRICTIONAL: 8 around, 0.25 m, 10 mm in the contact zone, P2, generalised-alpha
 rho_inf = 0, 16 steps per period; 10 kN ramped over 1 s in 10 ms steps), then, as
 benchmarks/scenarios.py (whose functions it uses): the modal stage chooses the best-ranked
 natural frequency f_r (the TP's m = 1 pair, 141.9 Hz) and the non-modal control f_c
 (71.0 Hz); a lead-in of LEAD_IN at f_c with the amplitude A = 3.6 kN brings the joint to its
 equilibrium under the peak force (whole periods, so that the force is continuous where the
-branches start); from that state (solver.checkpoint) three branches of BRANCH each: (a) f_r
+branches start); from that state (solver.installation.checkpoint) three branches of BRANCH each: (a) f_r
 at A, (b) f_c at A, (c) f_c at 2 A.
 
 Why these durations. Switching the force on excites the free vibration of the lowest mode
@@ -83,9 +83,9 @@ from mpi4py import MPI
 
 from benchmarks.scenarios import (SettledJoint, gain, harmonic_stage, late_gain, settle,
                                   stabilised)
-from solver import checkpoint
+from solver.installation import checkpoint
 from solver.contact import NitscheContact, Status
-from solver.demo_cli import COARSE_FRICTIONAL
+from solver.installation.cli import COARSE_FRICTIONAL
 
 pytestmark = [
     pytest.mark.mpi,

@@ -12,8 +12,8 @@ from scipy.optimize import brentq
 
 from geometry.parameters import load_geometry
 from solver.contact import FrictionLaw
-from solver.lumped import GRAVITY, AxialLoad, LumpedModel, Mode, simulate
-from solver.shell import joint_stiffness
+from solver.reduced.lumped import GRAVITY, AxialLoad, LumpedModel, Mode, simulate
+from solver.reduced.shell import joint_stiffness
 
 
 @pytest.fixture(scope="module")

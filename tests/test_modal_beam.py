@@ -5,7 +5,7 @@ import pytest
 from mpi4py import MPI
 
 from common.material import Material
-from solver.modal import EigenOptions, modal_analysis
+from solver.modal.eigen import EigenOptions, modal_analysis
 
 from dolfinx import fem, mesh
 

@@ -4,7 +4,7 @@ import numpy as np
 import pytest
 from mpi4py import MPI
 
-from solver.modes import classify
+from solver.modal.classify import classify
 
 from dolfinx import fem, mesh
 

@@ -1,7 +1,7 @@
 """Thin cylinders meshed by geometry/: solid modal analysis against shell theory.
 
 Reference: Rayleigh-Ritz with Sanders-Koiter shell energy and Legendre series
-(solver/cylinder_shell.py), itself checked against the published clamped-clamped
+(solver/reduced/cylinder_shell.py), itself checked against the published clamped-clamped
 benchmark (~1701 Hz).
 """
 
@@ -12,10 +12,10 @@ from mpi4py import MPI
 from geometry import tags
 from geometry.mesh import create_tube_mesh
 from geometry.parameters import ConePart, MeshOptions
-from solver.cylinder_shell import cylinder_frequencies
+from solver.reduced.cylinder_shell import cylinder_frequencies
 from common.material import Material
-from solver.modal import EigenOptions, clamp, modal_analysis
-from solver.modes import classify
+from solver.modal.eigen import EigenOptions, clamp, modal_analysis
+from solver.modal.classify import classify
 
 from dolfinx import fem
 

@@ -15,10 +15,10 @@ from geometry import tags
 from common.case import read_case
 from solver.contact import Status
 from common.material import Material
-from solver.modal import EigenOptions, clamp, modal_analysis
-from solver.modal_interface import ContactInterface, bonded_band
-from solver.modal_joint import JointCase, joint_modes
-from solver.modal_report import JointParts, describe_modes, format_table, write_outputs
+from solver.modal.eigen import EigenOptions, clamp, modal_analysis
+from solver.modal.interface import ContactInterface, bonded_band
+from solver.modal.joint import JointCase, joint_modes
+from solver.modal.ranking import JointParts, describe_modes, format_table, write_outputs
 
 pytestmark = pytest.mark.mpi
 

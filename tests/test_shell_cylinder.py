@@ -8,7 +8,7 @@ import numpy as np
 import pytest
 
 from common.material import Material
-from solver.shell import Meridian, Shell, ring_flexibility, solve_ring_load
+from solver.reduced.shell import Meridian, Shell, ring_flexibility, solve_ring_load
 
 MAT = Material(E=210e9, nu=0.3)
 R, H, L = 0.3, 0.006, 1.4  # scaled TP: mid-surface radius, wall, length [m]

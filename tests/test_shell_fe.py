@@ -22,8 +22,8 @@ from geometry import tags  # noqa: E402
 from geometry.mesh import create_tube_mesh  # noqa: E402
 from geometry.parameters import MeshOptions, load_geometry  # noqa: E402
 from solver.elasticity import epsilon, sigma  # noqa: E402
-from solver.modal import clamp  # noqa: E402
-from solver.shell import ring_flexibility, tp_edge_shell  # noqa: E402
+from solver.modal.eigen import clamp  # noqa: E402
+from solver.reduced.shell import ring_flexibility, tp_edge_shell  # noqa: E402
 
 pytestmark = pytest.mark.mpi
 

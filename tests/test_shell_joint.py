@@ -12,7 +12,7 @@ import math
 import pytest
 
 from geometry.parameters import load_geometry
-from solver.shell import joint_stiffness, mp_contact_shell, tp_edge_shell
+from solver.reduced.shell import joint_stiffness, mp_contact_shell, tp_edge_shell
 
 
 def lam(shell, r: float) -> float:

@@ -66,7 +66,7 @@ class NitscheContact:
     ``dolfinx.fem.petsc`` vectors/matrices of V (global indices, owned rows). The
     Jacobian is a separate AIJ matrix with its own sparsity (it couples slave and
     master dofs, which the bulk pattern lacks): add it as ``A.axpy(1, J,
-    PETSc.Mat.Structure.DIFFERENT_NONZERO_PATTERN)`` or use ``solver.nonlinear``, which
+    PETSc.Mat.Structure.DIFFERENT_NONZERO_PATTERN)`` or use ``solver.dynamics.newton``, which
     keeps A and J apart.
     """
 

@@ -4,17 +4,17 @@ Semi-discrete balance (SI units: u in m, forces in N, t in s)
 
     M a + C v + K u + r_c(u) = f(t),
 
-integrated by a scheme of ``solver.newmark`` (Newmark average acceleration by default,
+integrated by a scheme of ``solver.dynamics.schemes`` (Newmark average acceleration by default,
 generalised-alpha, or quasi-static). Each step solves the effective system
 
     A u_{n+1} + r_c(u_{n+1}) = b,    A = K + c_M M + c_C C_Rayleigh,
 
 with a reused LU factorisation of A when there is no contact, and with
-``solver.nonlinear.solve_contact_problem`` (generalised Newton, LU of A + J_c reused
+``solver.dynamics.newton.solve_contact_problem`` (generalised Newton, LU of A + J_c reused
 across iterations and steps while dt is unchanged) when there is. The contact object
-is ``solver.contact.NitscheContact`` (two bodies) or ``solver.contact.RigidPlaneContact``.
+is ``solver.contact.nitsche.NitscheContact`` (two bodies) or ``solver.contact.RigidPlaneContact``.
 Modal damping is low rank and enters b explicitly through the Newmark-predicted
-velocity v_n + (1 - alpha_f) dt a_n (error O(dt^2), see ``solver.damping``).
+velocity v_n + (1 - alpha_f) dt a_n (error O(dt^2), see ``solver.dynamics.damping``).
 Dirichlet conditions must be homogeneous (clamped boundaries).
 """
 
@@ -31,13 +31,13 @@ from petsc4py import PETSc
 from dolfinx import fem
 from dolfinx.fem import petsc as fem_petsc
 
-from solver.condensation import BulkCondensation
+from solver.dynamics.condensation import BulkCondensation
 from solver.contact import Status
-from solver.damping import ModalDamping, RayleighDamping
+from solver.dynamics.damping import ModalDamping, RayleighDamping
 from common.material import Material
 from solver.elasticity import epsilon, sigma
-from solver.newmark import GeneralisedAlpha, Scheme
-from solver.nonlinear import ContactNewtonSolver
+from solver.dynamics.schemes import GeneralisedAlpha, Scheme
+from solver.dynamics.newton import ContactNewtonSolver
 
 Load = Callable[[float, PETSc.Vec], None]  #: load(t, out): write the load vector f(t) [N] into out
 
@@ -88,12 +88,12 @@ class Elastodynamics:
                  newton_options: dict | None = None, condense_bulk: bool = False):
         if condense_bulk and not hasattr(contact, "support_cells"):
             raise ValueError("condense_bulk needs a contact object that names its cells (NitscheContact)")
-        self.condense_bulk = condense_bulk  #: Newton on the contact zone, the bulk condensed (solver.condensation)
+        self.condense_bulk = condense_bulk  #: Newton on the contact zone, the bulk condensed (solver.dynamics.condensation)
         self._condensation: BulkCondensation | None = None
         self.V, self.M, self.K, self.bcs = V, M, K, list(bcs)
         self.scheme, self.damping, self.contact = scheme, damping, contact
         self.load = load
-        self.newton_options = dict(newton_options or {})  #: options of solver.nonlinear.ContactNewtonSolver
+        self.newton_options = dict(newton_options or {})  #: options of solver.dynamics.newton.ContactNewtonSolver
         self._newton = None
         self.u, self.v, self.a = (fem.Function(V, name=n) for n in ("displacement", "velocity", "acceleration"))
         self.t = 0.0

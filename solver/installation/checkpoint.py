@@ -41,7 +41,7 @@ def _rank_file(folder: Path, rank: int) -> Path:
 
 
 def save(folder: str | Path, problem, record: dict[str, Any]) -> None:
-    """Write the state of ``problem`` (``solver.dynamics.Elastodynamics``) and ``record``."""
+    """Write the state of ``problem`` (``solver.dynamics.elastodynamics.Elastodynamics``) and ``record``."""
     comm: MPI.Comm = problem.V.mesh.comm
     folder = Path(folder)
     tmp = folder.with_name(folder.name + ".tmp")

@@ -28,8 +28,8 @@ from geometry.mesh import create_joint_mesh
 from geometry.parameters import JointGeometry, MeshOptions, material_from_dict
 from common.case import construct
 from common.material import Material
-from solver.modal import EigenOptions, ModalResult, clamp, modal_analysis
-from solver.modal_interface import ContactInterface, bonded_band
+from solver.modal.eigen import EigenOptions, ModalResult, clamp, modal_analysis
+from solver.modal.interface import ContactInterface, bonded_band
 
 
 CLAMPABLE = ("MP_CLAMPED", "TP_TOP")  #: end conditions: facet groups that may be clamped

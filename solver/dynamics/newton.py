@@ -17,7 +17,7 @@ iterations the next correction refactorises. The policy uses iteration counts, n
 timings, so a run's results do not depend on the machine's load. GMRES multiplies the
 operator only with preconditioned vectors z = P^-1 v, P = A + J_P the factorised matrix, and
 (A + J) z = v + (J - J_P) z needs products with the interface matrices only, not with A.
-With a ``zone`` (the condensed system of ``solver.condensation``, identity rows off the zone)
+With a ``zone`` (the condensed system of ``solver.dynamics.condensation``, identity rows off the zone)
 only the zone block of A + J is factorised.
 
 The corrections are inexact Newton steps (Eisenstat and Walker 1996, choice 2): GMRES
@@ -70,7 +70,7 @@ class _BlockLU:
     """Preconditioner (PETSc python PC context) applying the LU factors of P = A + J_P, or with
     a zone those of its (zone, zone) block and the identity elsewhere, which is P^-1 itself
     when A is block diagonal with identity rows off the zone and J lives in the zone
-    (``solver.condensation``). ``zone``: this rank's zone dofs as local indices.
+    (``solver.dynamics.condensation``). ``zone``: this rank's zone dofs as local indices.
 
     It remembers its last input v and output z = P^-1 v, for ``_SumOperator``."""
 
@@ -158,7 +158,7 @@ class ContactNewtonSolver:
             where the TP stops the Newton step slides it on until the friction reverses, and
             halving only approaches the stop linearly (docs/contact.md, section 6).
         zone: global dofs (this rank's part) off which A is the identity and J vanishes (the
-            condensed system of ``solver.condensation.BulkCondensation``): only the zone block
+            condensed system of ``solver.dynamics.condensation.BulkCondensation``): only the zone block
             of A + J is factorised. None: A + J is factorised whole.
     """
 
@@ -396,7 +396,7 @@ class ContactNewtonSolver:
         """Solve A u + r_c(u) = b for u (initial guess: u on entry, Dirichlet values imposed).
 
         ``load_norm``: the ||b|| [N] of the relative tolerance (default: ||b||; the condensed
-        system of ``solver.condensation`` passes its uncondensed load's, so that both stop alike).
+        system of ``solver.dynamics.condensation`` passes its uncondensed load's, so that both stop alike).
         """
         for bc in self.bcs:
             bc.set(u.x.array)

@@ -5,7 +5,7 @@ base case. :data:`VARIANTS` holds the SPEC values: friction mu_s/mu_d 0.5/0.4 (r
 0.0625/0.05, friction decay d_c 100 (reference) vs 1 s/m, damping Rayleigh (reference) vs
 modal, and the axial mesh size halved. Each variant runs the installation pipeline into its
 own sub-folder; :func:`summary_rows` collects the settlement per stage and variant and
-:func:`plot_summary` draws it. Settlement in mm, positive down (``solver.dynamics.Settlement``).
+:func:`plot_summary` draws it. Settlement in mm, positive down (``solver.dynamics.elastodynamics.Settlement``).
 """
 
 from __future__ import annotations

@@ -8,7 +8,7 @@ Degrees of freedom q = (v, u, theta, w), all in SI units (m, m, rad, m):
          positive when it moves the TP's inner fibre down the MP meridian;
 * w      displacement of the MP's contact circle down its meridian, spring K_T, mass m_T.
 
-The springs and masses come from shell statics (:func:`solver.shell.joint_stiffness`).
+The springs and masses come from shell statics (:func:`solver.reduced.shell.joint_stiffness`).
 Contact acts at the TP's inner surface at its lower edge, on the MP cone of
 half-angle alpha:
 
@@ -39,7 +39,7 @@ from scipy.integrate import solve_ivp
 from scipy.linalg import eigh
 
 from solver.contact import FrictionLaw
-from solver.shell import JointStiffness
+from solver.reduced.shell import JointStiffness
 
 #: standard gravity [m/s^2]
 GRAVITY = 9.81

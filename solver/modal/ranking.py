@@ -2,10 +2,10 @@
 
 One ``ModeRecord`` per mode: frequency, (m, n) of each part and of the part that
 dominates the kinetic energy, and the settlement indicators of
-:mod:`solver.mode_indicators` for two ways of loading the TP top:
+:mod:`solver.modal.indicators` for two ways of loading the TP top:
 
 * "face": a force spread uniformly over the TP top face (as in the dynamics,
-  ``solver.loads.TopFaceLoad``); on a perfectly axisymmetric joint it excites
+  ``solver.dynamics.loads.TopFaceLoad``); on a perfectly axisymmetric joint it excites
   only m = 0 (axial) and m = 1 (lateral) modes;
 * "point": a force at one point of the TP top edge (mid-wall, theta = 0, as an
   eccentric motor or shaker fixed to one side), which excites every m.
@@ -30,10 +30,10 @@ from dolfinx import fem, io, plot
 from mpi4py import MPI
 
 from common.material import Material
-from solver.modal import ModalResult
-from solver.loads import PointLoad, TopFaceLoad, eccentric_amplitude, shaker_point
-from solver.mode_indicators import InterfaceSampler, energy_shares, modal_force, resonant_slip
-from solver.modes import classify
+from solver.modal.eigen import ModalResult
+from solver.dynamics.loads import PointLoad, TopFaceLoad, eccentric_amplitude, shaker_point
+from solver.modal.indicators import InterfaceSampler, energy_shares, modal_force, resonant_slip
+from solver.modal.classify import classify
 
 
 @dataclass(frozen=True)

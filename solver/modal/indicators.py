@@ -5,7 +5,7 @@ All quantities refer to mass-normalised modes (phi^T M phi = 1):
 * ``kinetic_share`` / ``strain_share``: fraction of the modal kinetic / strain
   energy in each part [-].
 * ``modal_force``: phi^T f of a unit force (1 N), e.g. spread uniformly over the
-  TP top face or applied at one point of its top edge (``solver.loads``) [1/sqrt(kg)].
+  TP top face or applied at one point of its top edge (``solver.dynamics.loads``) [1/sqrt(kg)].
 * ``interface_slip``: RMS of the relative tangential (meridional, i.e. slip
   direction) displacement between TP and MP over sample points of the contact
   interface [1/sqrt(kg), i.e. m per unit of the modal coordinate in m sqrt(kg)].

@@ -1,7 +1,7 @@
 """Coupling of MP and TP in the modal analysis through the contact interface.
 
 The interface stiffness is the linear tangent of the Nitsche contact
-(:meth:`solver.contact.NitscheContact.interface_stiffness`) for a fixed per-point
+(:meth:`solver.contact.nitsche.NitscheContact.interface_stiffness`) for a fixed per-point
 status: STICK ties normal and tangential relative motion, SLIP the normal motion
 only, OPEN nothing. The symmetric Nitsche variant (theta = 1) keeps K symmetric,
 as the generalized symmetric eigenproblem requires. A bonded band of height H [m]

@@ -5,14 +5,14 @@ Stages of :class:`Installation`:
 1. ``self-weight``: axial force on the TP top ramped 0 -> ``force_N`` over ``ramp_time_s``,
    then held for ``hold_s`` (dynamic by default); the TP settles in stick-slip steps.
 2. ``modal``: natural frequencies of the settled joint, with the contact tangent at the
-   settled status (``solver.modal_interface.ContactInterface``), ranked by
-   ``solver.modal_report.describe_modes``; the excitation frequencies are chosen from the
+   settled status (``solver.modal.interface.ContactInterface``), ranked by
+   ``solver.modal.ranking.describe_modes``; the excitation frequencies are chosen from the
    ranking (see :func:`choose_frequencies`), each with its reason.
 3. ``vibration``: the harmonic schedule (lead-in stages, the chosen natural frequencies and
    a non-modal control frequency, or an explicit ``[[schedule]]``) on top of the held force.
-4. the report (``solver.report``): settlement per stage, stick-slip events, contact status.
+4. the report (``solver.post.report``): settlement per stage, stick-slip events, contact status.
 
-Settlement is ``solver.dynamics.Settlement``: the axial slide [mm] of the TP's lower edge
+Settlement is ``solver.dynamics.elastodynamics.Settlement``: the axial slide [mm] of the TP's lower edge
 relative to the MP wall beside it, positive down. After the self-weight stage the static axial
 force may follow a piecewise-linear history (``[static_force]``, e.g. a dismount pull), and the
 cones may carry radial imperfections (``[imperfections.mp]``, ``[imperfections.tp]``: ovality or
@@ -44,13 +44,14 @@ from geometry.contact_map import tp_placement
 from geometry.imperfections import RadialDeviation, ovality, read_imperfection
 from geometry.mesh import create_joint_mesh
 from geometry.parameters import JointGeometry, MeshOptions, geometry_from_case
-from solver import checkpoint, report
+from solver.installation import checkpoint
+from solver.post import report
 from common.case import construct
 from solver.contact import FrictionLaw, NitscheContact, Status
-from solver.damping import ModalDamping, RayleighDamping
-from solver.dynamics import ContactZoneGuard, Elastodynamics, Settlement, StepResult, assemble_structure, run
+from solver.dynamics.damping import ModalDamping, RayleighDamping
+from solver.dynamics.elastodynamics import ContactZoneGuard, Elastodynamics, Settlement, StepResult, assemble_structure, run
 from common.material import Material
-from solver.loads import (
+from solver.dynamics.loads import (
     PiecewiseLinearForce,
     PointLoad,
     RampedAxialForce,
@@ -60,10 +61,10 @@ from solver.loads import (
     TPLoading,
     shaker_point,
 )
-from solver.modal import EigenOptions, ModalResult, clamp, modal_analysis
-from solver.modal_interface import ContactInterface, bonded_band
-from solver.modal_report import JointParts, ModeRecord, describe_modes, write_csv, write_outputs
-from solver.newmark import scheme_from_name
+from solver.modal.eigen import EigenOptions, ModalResult, clamp, modal_analysis
+from solver.modal.interface import ContactInterface, bonded_band
+from solver.modal.ranking import JointParts, ModeRecord, describe_modes, write_csv, write_outputs
+from solver.dynamics.schemes import scheme_from_name
 
 SURFACES = ("TP_CONTACT", "MP_CONTACT")
 FORCINGS = ("eccentric", "face", "shaker")
@@ -85,13 +86,13 @@ class ContactSettings:
     lagged_friction: bool = False
     degree: int = 2  #: Lagrange degree of the displacement
     max_iterations: int = 30  #: Newton iterations per step before the step is cut
-    max_backtracks: int = 6  #: Newton line-search halvings (solver.nonlinear.ContactNewtonSolver)
+    max_backtracks: int = 6  #: Newton line-search halvings (solver.dynamics.newton.ContactNewtonSolver)
     max_gap_change: float = 0.0  #: gap-limited Newton steps [m] (ContactNewtonSolver); 0: off
     #: sparse LU of the Newton corrections: "mumps" (faster), "superlu_dist" (bitwise repeatable on
     #: several ranks, where MUMPS's factors vary at round-off from run to run, which stick-slip
     #: amplifies), or "auto": MUMPS on one rank, SuperLU_DIST on several
     lu_solver: str = "auto"
-    #: Newton on the contact zone with the linear bulk condensed exactly (solver.condensation):
+    #: Newton on the contact zone with the linear bulk condensed exactly (solver.dynamics.condensation):
     #: cheaper steps, plus |interface| bulk solves whenever the step size changes
     condense_bulk: bool = False
 

@@ -1,0 +1,1 @@
+"""Outputs of the runs: reports of an installation run (``report``)."""
