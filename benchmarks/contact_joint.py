@@ -159,7 +159,9 @@ def main(argv=None) -> int:
 def self_weight(a, V, data, joint, material, contact) -> int:
     """Dynamic self-weight ramp (solver.dynamics) with this contact; prints one line per step."""
     from solver.dynamics.damping import RayleighDamping
-    from solver.dynamics.elastodynamics import Elastodynamics, Settlement, assemble_structure, run
+    from solver.dynamics.elastodynamics import assemble_structure, Elastodynamics
+    from solver.installation.observers import Settlement
+    from solver.dynamics.time_loop import run
     from solver.dynamics.loads import RampedAxialForce, TopFaceLoad, TPLoading
     from solver.dynamics.schemes import GeneralisedAlpha
 

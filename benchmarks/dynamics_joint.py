@@ -46,11 +46,14 @@ from solver.installation import checkpoint  # noqa: E402
 from common.case import resolve_case_path  # noqa: E402
 from solver.contact import NitscheContact  # noqa: E402
 from solver.dynamics.damping import RayleighDamping  # noqa: E402
-from solver.dynamics.elastodynamics import ContactZoneGuard, Elastodynamics, Settlement, assemble_structure, run  # noqa: E402
+from solver.installation.observers import ContactZoneGuard, Settlement  # noqa: E402
+from solver.dynamics.elastodynamics import assemble_structure, Elastodynamics  # noqa: E402
+from solver.dynamics.time_loop import run  # noqa: E402
 from solver.contact import FrictionLaw  # noqa: E402
 from solver.dynamics.loads import RampedAxialForce, Schedule, Stage, TopFaceLoad, TPLoading  # noqa: E402
 from solver.modal.eigen import clamp  # noqa: E402
 from solver.dynamics.schemes import GeneralisedAlpha  # noqa: E402
+from solver.post.csv import CsvWriter  # noqa: E402
 
 from phase_timer import PhaseTimer  # noqa: E402
 
@@ -184,8 +187,9 @@ def main(argv=None) -> int:
     for name, t_end, dt in stages:
         timer.reset()
         t0, cpu0 = time.perf_counter(), time.process_time()
-        rows = run(problem, t_end, dt, observers=[*observers, StepLog(timer, say)], csv_path=out / f"{name}.csv",
-                   progress=False)
+        with CsvWriter(out / f"{name}.csv", comm=comm) as writer:
+            rows = run(problem, t_end, dt, observers=[*observers, StepLog(timer, say)], on_row=writer.write,
+                       progress=False)
         if name == "self-weight" and a.ramp_checkpoint:
             checkpoint.save(a.ramp_checkpoint, problem, {"stage": name})
         wall, cpu = time.perf_counter() - t0, time.process_time() - cpu0

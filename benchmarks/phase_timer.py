@@ -71,7 +71,9 @@ class PhaseTimer:
         self._undo.append((owner, name, original))
 
     def install(self) -> "PhaseTimer":
-        NC, CN, ED = solver.contact.nitsche.NitscheContact, solver.dynamics.newton.ContactNewtonSolver, solver.dynamics.elastodynamics.Elastodynamics
+        NC = solver.contact.nitsche.NitscheContact
+        CN = solver.dynamics.newton.ContactNewtonSolver
+        ED = solver.dynamics.elastodynamics.Elastodynamics
         self._wrap(ED, "step", "other")
         self._wrap(solver.contact.nitsche, "pair", "pairing")
         self._wrap(NC, "update", "contact update")

@@ -3,7 +3,7 @@
 From one settled state the run branches (state saved with solver.installation.checkpoint):
 
 1. self-weight stage of the case (10 kN ramp), then the modal stage of the settled joint
-   (solver.installation.runner.settled_modes, ranking by solver.modal.ranking.describe_modes) and
+   (solver.installation.model.settled_modes, ranking by solver.modal.ranking.describe_modes) and
    the frequency choice of the installation run (choose_frequencies: best-ranked natural
    frequency f_r, non-modal control f_c);
 2. lead-in: ``--lead-in`` s (rounded to whole periods) at f_c with the amplitude A
@@ -41,20 +41,15 @@ from common import backend  # noqa: E402,F401
 import numpy as np  # noqa: E402
 from mpi4py import MPI  # noqa: E402
 
-from solver.installation import checkpoint
+from solver.installation import checkpoint  # noqa: E402
 from solver.post import report  # noqa: E402
 from common.case import read_case  # noqa: E402
-from solver.dynamics.elastodynamics import Observer, run  # noqa: E402
-from solver.installation.runner import (  # noqa: E402
-    InstallationCase,
-    JointModel,
-    attach_vibration,
-    build_joint_model,
-    choose_frequencies,
-    settled_modes,
-)
+from solver.dynamics.time_loop import Observer, run  # noqa: E402
+from solver.installation.case import InstallationCase
+from solver.installation.model import attach_vibration, JointModel, set_up_joint_model, settled_modes
+from solver.installation.frequencies import choose_frequencies
 from solver.dynamics.loads import Schedule, Stage  # noqa: E402
-from solver.modal.ranking import JointParts, describe_modes  # noqa: E402
+from solver.modal.ranking import describe_modes, JointParts  # noqa: E402
 from solver.installation.cli import COARSE_FRICTIONAL  # noqa: E402  (the default run's joint and contact settings)
 
 @dataclass
@@ -71,7 +66,7 @@ def settle(comm: MPI.Comm, overrides: list[str], case_name: str = "scaled") -> S
     """Build the joint of the case with ``overrides``, run its self-weight stage and choose
     f_r and f_c as the installation run does (collective)."""
     case = InstallationCase.from_dict(read_case(case_name, overrides))
-    model = build_joint_model(comm, case)
+    model = set_up_joint_model(comm, case)
     sw = case.self_weight
     run(model.problem, sw.duration_s, sw.dt_s, progress=False)
     result, _ = settled_modes(model, case.vibration.n_modes)

@@ -34,7 +34,7 @@ from common import backend  # noqa: E402,F401
 from mpi4py import MPI  # noqa: E402
 
 from benchmarks.scenarios import gain, harmonic_stage, late_gain, settle  # noqa: E402
-from solver.installation import checkpoint
+from solver.installation import checkpoint  # noqa: E402
 from solver.post import report  # noqa: E402
 from solver.installation.cli import COARSE_FRICTIONAL  # noqa: E402
 

@@ -34,13 +34,14 @@ from mpi4py import MPI  # noqa: E402
 
 from solver.installation import cli as demo_cli  # noqa: E402
 from solver.installation.dismount import (  # noqa: E402
+    DISMOUNT_COLUMNS,
     DismountPlan,
     dismount_case,
     dismount_table,
-    plot,
     pull_out_force,
-    write_table,
 )
+from solver.post.csv import write_csv  # noqa: E402
+from solver.post.plots import plot_dismount  # noqa: E402
 
 #: the coarse joint is stiff (8 around locks, SPEC 4): its modes start near 140 Hz, so ranked
 #: frequencies up to 700 Hz are allowed
@@ -85,8 +86,8 @@ def main(argv: list[str] | None = None) -> int:
         return code
     out = Path(args.output)
     table = dismount_table(runner.history, runner.stages, plan.roles(), runner.model.static)
-    write_table(table, out / "dismount.csv", comm)
-    plot(runner.history, table, out / "dismount.png", comm)
+    write_csv(out / "dismount.csv", DISMOUNT_COLUMNS, table, comm)
+    plot_dismount(runner.history, table, out / "dismount.png", comm)
     installed = [r for r in runner.history if r["stage"] == plan.n_install][-1]
     normal, alpha = installed["normal_force_N"], case.joint.mp.half_angle
     low, high = (pull_out_force(normal, mu, alpha)

@@ -24,7 +24,8 @@ from mpi4py import MPI  # noqa: E402
 
 from solver.installation import cli as demo_cli  # noqa: E402
 from common.case import read_case  # noqa: E402
-from solver.installation.runner import Installation, InstallationCase  # noqa: E402
+from solver.installation.runner import Installation  # noqa: E402
+from solver.installation.case import InstallationCase  # noqa: E402
 
 #: --quick: coarse mesh, a fast self-weight ramp, no lead-in, short stages and frictionless
 #: contact (a smoke run of every stage and output; with friction, Newton stalls on this coarse

@@ -20,7 +20,8 @@ from mpi4py import MPI
 
 from common.case import read_case
 from solver.modal.joint import JointCase, joint_modes
-from solver.modal.ranking import JointParts, describe_modes, format_table, write_outputs
+from solver.modal.ranking import describe_modes, JointParts
+from solver.modal.outputs import format_table, write_outputs
 
 QUICK = ["modal.degree=2", "mesh.axial_size=0.2", "modal.n_modes=10"]
 

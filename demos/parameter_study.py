@@ -28,10 +28,10 @@ from common import backend  # noqa: F401,E402  (before dolfinx)
 from mpi4py import MPI  # noqa: E402
 
 from solver.installation import cli as demo_cli  # noqa: E402
-from solver.post import report  # noqa: E402
+from solver.post.csv import write_csv  # noqa: E402
+from solver.post.plots import plot_parameter_study  # noqa: E402
 from solver.installation.parameter_study import (  # noqa: E402
     SUMMARY_COLUMNS,
-    plot_summary,
     select,
     summary_rows,
     variants,
@@ -94,8 +94,8 @@ def main(argv: list[str] | None = None) -> int:
                 log(f"  {r['name']:>12} {r['role']:>11} {r['frequency_Hz']:8.2f} Hz: "
                     f"gained {r['gained_mm']:+.4f} mm, settlement {r['settlement_end_mm']:.4f} mm")
         log(f"  {status} in {time.perf_counter() - wall:.1f} s")
-        report.write_table(rows, SUMMARY_COLUMNS, out / "summary.csv", comm)
-        plot_summary(rows, out / "summary.png", comm)
+        write_csv(out / "summary.csv", SUMMARY_COLUMNS, rows, comm)
+        plot_parameter_study(rows, out / "summary.png", comm)
     log(f"\nsummary: {out / 'summary.csv'}, {out / 'summary.png'}")
     if comm.rank == 0:
         finals = {r["variant"]: r["settlement_end_mm"] for r in rows}

@@ -34,6 +34,8 @@ from mpi4py import MPI  # noqa: E402
 
 from solver.installation import cli as demo_cli  # noqa: E402
 from solver.post import report  # noqa: E402
+from solver.post.csv import write_csv  # noqa: E402
+from solver.post.plots import plot_sweep  # noqa: E402
 from solver.dynamics.loads import frequency_ramp, frequency_steps  # noqa: E402
 
 DEFAULT = demo_cli.COARSE_FRICTIONAL + ["vibration.n_modes=20"]
@@ -117,8 +119,8 @@ def main(argv: list[str] | None = None) -> int:
         return code
     out = Path(args.output)
     rows = report.sweep_rows(runner.history)
-    report.write_table(rows, report.SWEEP_COLUMNS, out / "sweep.csv", comm)
-    report.plot_sweep(rows, runner.stages, runner.natural_frequencies, out / "sweep.png", comm)
+    write_csv(out / "sweep.csv", report.SWEEP_COLUMNS, rows, comm)
+    plot_sweep(rows, runner.stages, runner.natural_frequencies, out / "sweep.png", comm)
     log(f"\nsweep: settlement gained {rows[-1]['settlement_gain_mm']:+.4f} mm over "
         f"{rows[-1]['time_s'] - runner.stages[1]['start_s']:.4g} s")
     if args.sweep == "steps":

@@ -284,7 +284,7 @@ class MeshOptions:
     from the TP edge by about settlement x tan(beta) / (tan(alpha) - tan(beta)) (20 x the
     settlement for the scaled joint), so it is only resolved by a fine axial mesh there.
     The contact surfaces (``tags.MP_CONTACT``, ``tags.TP_CONTACT``) are then the cone walls
-    inside the zone: contact above it is not modelled (``solver.dynamics.elastodynamics.ContactZoneGuard``
+    inside the zone: contact above it is not modelled (``solver.installation.observers.ContactZoneGuard``
     stops a run whose contact band reaches the zone's top).
     """
 

@@ -60,7 +60,7 @@ def test_contact_at_the_top_of_the_slave_surface_is_detected():
 
     import dolfinx
 
-    from solver.dynamics.elastodynamics import ContactZoneGuard, touches_top
+    from solver.installation.observers import ContactZoneGuard, touches_top
 
     _, contact, results, u = sliding_block(MPI.COMM_WORLD, FrictionLaw(mu_s=0.3, mu_d=0.3, d_c=0.0),
                                            steps=1, slide_per_step=0.0, dt=None)

@@ -19,7 +19,9 @@ from mpi4py import MPI
 from geometry import tags
 from common.case import read_case
 from solver.installation.dismount import DismountPlan, dismount_case, dismount_table
-from solver.installation.runner import Installation, InstallationCase, build_joint_model
+from solver.installation.runner import Installation
+from solver.installation.case import InstallationCase
+from solver.installation.model import set_up_joint_model
 
 pytestmark = pytest.mark.mpi
 
@@ -44,7 +46,7 @@ def test_imperfection_reaches_the_mesh():
         read_case("scaled", TINY + [f"imperfections.tp.amplitude_m={amplitude}",
                                     f"imperfections.tp.phase_deg={phase}"])
     )
-    model = build_joint_model(MPI.COMM_WORLD, case)
+    model = set_up_joint_model(MPI.COMM_WORLD, case)
     joint, tp_z = case.joint, model.placed.tp_offset
     shift = tp_z - joint.tp_offset
     assert shift == pytest.approx(amplitude / math.tan(joint.mp.half_angle), rel=2e-3)

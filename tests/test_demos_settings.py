@@ -11,7 +11,8 @@ from mpi4py import MPI
 from geometry.contact_map import tp_placement
 from geometry.imperfections import ovality
 from common.case import read_case
-from solver.installation.runner import Excitation, InstallationCase, _schedule_excitations
+from solver.installation.frequencies import Excitation, schedule_excitations
+from solver.installation.case import InstallationCase
 from solver.dynamics.loads import (
     PiecewiseLinearForce,
     RampedAxialForce,
@@ -127,7 +128,7 @@ def test_ranked_stages_take_the_chosen_frequencies():
         Excitation(120.0, 3600.0, "modal", 7, 2, 1, 1, "first"),
         Excitation(105.0, 3600.0, "control", 0, -1, -1, 0, "control"),
     ]
-    out = _schedule_excitations(schedule, [11.0, 12.0], chosen)
+    out = schedule_excitations(schedule, [11.0, 12.0], chosen)
     assert [e.frequency_Hz for e in out] == [0.0, 90.0, 11.0]  # rank 2 is the 90 Hz mode
     assert out[0].reason == "no vibration" and "second" in out[1].reason
     assert (out[1].m, out[1].n, out[1].amplitude_N) == (3, 0, 3600.0)

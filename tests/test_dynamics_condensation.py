@@ -32,7 +32,9 @@ from common.case import read_case
 from solver.dynamics.condensation import BulkCondensation
 from solver.contact import NitscheContact
 from solver.dynamics.damping import RayleighDamping
-from solver.dynamics.elastodynamics import Elastodynamics, Settlement, assemble_structure, run
+from solver.dynamics.elastodynamics import assemble_structure, Elastodynamics
+from solver.installation.observers import Settlement
+from solver.dynamics.time_loop import run
 from solver.contact import FrictionLaw
 from solver.dynamics.loads import RampedAxialForce, TopFaceLoad, TPLoading
 from solver.dynamics.schemes import GeneralisedAlpha

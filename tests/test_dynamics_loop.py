@@ -14,7 +14,10 @@ from geometry import tags
 from geometry.mesh import create_joint_mesh
 from geometry.parameters import MeshOptions, load_geometry
 from common.case import resolve_case_path
-from solver.dynamics.elastodynamics import Settlement, StepResult, run
+from solver.installation.observers import Settlement
+from solver.dynamics.elastodynamics import StepResult
+from solver.dynamics.time_loop import run
+from solver.post.csv import CsvWriter
 
 pytestmark = pytest.mark.mpi
 
@@ -39,8 +42,9 @@ def test_step_is_cut_and_regrown(tmp_path):
     problem = FlakyProblem(t_hard=0.35, max_ok=0.03)
     comm = MPI.COMM_WORLD
     path = comm.bcast(tmp_path / "history.csv" if comm.rank == 0 else None)  # written by rank 0
-    rows = run(problem, 1.0, 0.1, observers=[lambda p: {"settlement_mm": 10 * p.t}], csv_path=path,
-               progress=False)
+    with CsvWriter(path, comm=comm) as writer:
+        rows = run(problem, 1.0, 0.1, observers=[lambda p: {"settlement_mm": 10 * p.t}],
+                   on_row=writer.write, progress=False)
     steps = [r["dt_s"] for r in rows]
     assert sum(steps) == pytest.approx(1.0)
     assert min(steps) == pytest.approx(0.025)  # 0.1 -> 0.05 -> 0.025 <= 0.03

@@ -15,7 +15,8 @@ from dolfinx import fem, mesh
 from dolfinx.fem.petsc import set_bc
 
 from solver.dynamics.damping import ModalDamping, RayleighDamping
-from solver.dynamics.elastodynamics import Elastodynamics, assemble_structure, run
+from solver.dynamics.elastodynamics import assemble_structure, Elastodynamics
+from solver.dynamics.time_loop import run
 from common.material import Material
 from solver.dynamics.schemes import GeneralisedAlpha, QuasiStatic
 

@@ -22,7 +22,8 @@ from scipy.integrate import solve_ivp
 from dolfinx import fem, mesh
 from dolfinx.fem.petsc import assemble_vector
 
-from solver.dynamics.elastodynamics import Elastodynamics, assemble_structure, run
+from solver.dynamics.elastodynamics import assemble_structure, Elastodynamics
+from solver.dynamics.time_loop import run
 from common.material import Material
 from solver.contact import FrictionLaw
 from solver.dynamics.loads import TopFaceLoad

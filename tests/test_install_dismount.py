@@ -52,17 +52,13 @@ from common.case import read_case
 from solver.contact import Status
 from solver.installation.cli import COARSE_FRICTIONAL
 from solver.installation.dismount import DismountPlan, pull_out_force
-from solver.dynamics.elastodynamics import run
-from solver.installation.runner import (
-    InstallationCase,
-    StaticForceSettings,
-    attach_vibration,
-    build_joint_model,
-    choose_frequencies,
-    settled_modes,
-)
+from solver.dynamics.time_loop import run
+from solver.installation.case import InstallationCase
+from solver.installation.settings import StaticForceSettings
+from solver.installation.model import attach_vibration, set_up_joint_model, settled_modes
+from solver.installation.frequencies import choose_frequencies
 from solver.dynamics.loads import Schedule, Stage, frequency_ramp
-from solver.modal.ranking import JointParts, describe_modes
+from solver.modal.ranking import describe_modes, JointParts
 
 pytestmark = pytest.mark.mpi
 
@@ -127,7 +123,7 @@ def _vibrate(model, stage: Stage, f_max: float, chunks: int = 1, stop=None) -> n
 def settled(tmp_path_factory):
     comm = MPI.COMM_WORLD
     case = InstallationCase.from_dict(read_case("scaled", SCENARIO))
-    model = build_joint_model(comm, case)
+    model = set_up_joint_model(comm, case)
     sw = case.self_weight
     history = _advance(model, sw.duration_s, sw.dt_s)
     result, _ = settled_modes(model, case.vibration.n_modes)

@@ -7,7 +7,7 @@ import pytest
 from mpi4py import MPI
 
 from common.case import read_case
-from solver.installation.runner import InstallationCase
+from solver.installation.case import InstallationCase
 
 pytestmark = pytest.mark.mpi
 

@@ -18,7 +18,8 @@ from mpi4py import MPI
 
 from common.case import read_case
 from solver.installation.cli import COARSE_FRICTIONAL
-from solver.installation.runner import Installation, InstallationCase
+from solver.installation.runner import Installation
+from solver.installation.case import InstallationCase
 
 pytestmark = pytest.mark.mpi
 

@@ -6,7 +6,7 @@ from types import SimpleNamespace
 import numpy as np
 import pytest
 
-from solver.installation.runner import Excitation
+from solver.installation.frequencies import Excitation
 from solver.post.report import (SELECTIVE, format_selectivity, format_stabilisation,
                            frequency_selectivity, late_gain, stabilised, stage_summary)
 

@@ -17,7 +17,7 @@ a 2 s ramp).
   same load than the reference friction (0.5/0.4) (compared at a quarter of the ramp: the
   low-friction run needs many Newton iterations per step later in the ramp).
 * SPEC 5.8: the natural frequencies of the settled joint (contact tangent of the current
-  contact set, solver.installation.runner.settled_modes) rise with settlement: the lowest modes at
+  contact set, solver.installation.model.settled_modes) rise with settlement: the lowest modes at
   the end of the ramp lie above those at half the load.
 
 The vibration scenarios are tests/test_install_vibration.py (SPEC 5.2, 5.3; opt-in with
@@ -31,8 +31,9 @@ from mpi4py import MPI
 
 from common.case import read_case
 from solver.installation.cli import COARSE_FRICTIONAL
-from solver.dynamics.elastodynamics import run
-from solver.installation.runner import InstallationCase, build_joint_model, settled_modes
+from solver.dynamics.time_loop import run
+from solver.installation.case import InstallationCase
+from solver.installation.model import set_up_joint_model, settled_modes
 from solver.post.report import stick_slip_events
 
 pytestmark = pytest.mark.mpi
@@ -47,7 +48,7 @@ def _self_weight(overrides: list[str], modes_at: tuple[float, ...] = (), end: fl
     (time [s], settlement [mm]) and the settled joint's frequencies [Hz] at the times
     ``modes_at`` (fractions of the ramp)."""
     case = InstallationCase.from_dict(read_case("scaled", SCENARIO + overrides))
-    model = build_joint_model(MPI.COMM_WORLD, case)
+    model = set_up_joint_model(MPI.COMM_WORLD, case)
     sw = case.self_weight
     history = []
 

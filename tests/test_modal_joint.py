@@ -18,7 +18,8 @@ from common.material import Material
 from solver.modal.eigen import EigenOptions, clamp, modal_analysis
 from solver.modal.interface import ContactInterface, bonded_band
 from solver.modal.joint import JointCase, joint_modes
-from solver.modal.ranking import JointParts, describe_modes, format_table, write_outputs
+from solver.modal.ranking import describe_modes, JointParts
+from solver.modal.outputs import format_table, write_outputs
 
 pytestmark = pytest.mark.mpi
 

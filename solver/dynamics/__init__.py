@@ -2,8 +2,10 @@
 
 ==================  ==============================================================
 ``schemes``         Newmark / generalised-alpha / quasi-static: coefficients, updates
-``elastodynamics``  Elastodynamics: state (u, v, a), the step u_n -> u_{n+1}, the time loop
+``elastodynamics``  Elastodynamics: state (u, v, a) and the step u_n -> u_{n+1}
+``time_loop``       run: the time loop with step cutting, observers
 ``newton``          generalized Newton for A u + r_c(u) = b with reused LU factors
+``linear_algebra``  LU solvers, the block-LU preconditioner, the operator A + J
 ``condensation``    static condensation of the linear bulk away from the contact zone
 ``loads``           axial forces, harmonic schedules, unit loads on the TP
 ``damping``         Rayleigh and modal damping

@@ -1,4 +1,4 @@
-"""Time loop of the linear structure with (optional) frictional contact.
+"""Time stepping of the linear structure with (optional) frictional contact: the step u_n -> u_{n+1}.
 
 Semi-discrete balance (SI units: u in m, forces in N, t in s)
 
@@ -18,8 +18,6 @@ velocity v_n + (1 - alpha_f) dt a_n (error O(dt^2), see ``solver.dynamics.dampin
 Dirichlet conditions must be homogeneous (clamped boundaries).
 """
 
-import csv
-import pathlib
 from collections.abc import Callable, Sequence
 from dataclasses import dataclass, field
 
@@ -31,13 +29,13 @@ from petsc4py import PETSc
 from dolfinx import fem
 from dolfinx.fem import petsc as fem_petsc
 
-from solver.dynamics.condensation import BulkCondensation
-from solver.contact import Status
-from solver.dynamics.damping import ModalDamping, RayleighDamping
 from common.material import Material
-from solver.elasticity import epsilon, sigma
-from solver.dynamics.schemes import GeneralisedAlpha, Scheme
+from solver.contact import Status
+from solver.dynamics.condensation import BulkCondensation
+from solver.dynamics.damping import ModalDamping, RayleighDamping
 from solver.dynamics.newton import ContactNewtonSolver
+from solver.dynamics.schemes import GeneralisedAlpha, Scheme
+from solver.elasticity import epsilon, sigma
 
 Load = Callable[[float, PETSc.Vec], None]  #: load(t, out): write the load vector f(t) [N] into out
 
@@ -295,148 +293,3 @@ class Elastodynamics:
         kinetic = 0.5 * v.dot(self._work)
         self.K.mult(u, self._work)
         return kinetic, 0.5 * u.dot(self._work)
-
-
-class CsvWriter:
-    """History file written as the run goes (rank 0 only), flushed after every row."""
-
-    def __init__(self, path: str | pathlib.Path, columns: Sequence[str], comm: MPI.Comm):
-        self.columns = list(columns)
-        self._file = None
-        if comm.rank == 0:
-            path = pathlib.Path(path)
-            path.parent.mkdir(parents=True, exist_ok=True)
-            self._file = open(path, "w", newline="")
-            self._writer = csv.writer(self._file)
-            self._writer.writerow(self.columns)
-            self._file.flush()
-
-    def write(self, row: dict[str, float]) -> None:
-        if self._file is not None:
-            self._writer.writerow([f"{row[c]:.10g}" for c in self.columns])
-            self._file.flush()
-
-    def close(self) -> None:
-        if self._file is not None:
-            self._file.close()
-
-
-Observer = Callable[[Elastodynamics], dict[str, float]]
-
-
-class Settlement:
-    """Settlement of the TP on the MP [mm], positive downward (an observer for ``run``).
-
-    s = mean_k u_z(MP, p_k) - mean_k u_z(TP, q_k), with q_k the points of the TP's lower
-    edge on its mid-wall circle (height z_e = joint.tp_offset, radius halfway between
-    the TP's inner and outer surface) and p_k the points of the MP's mid-wall circle at
-    the same height z_e, both at ``n_points`` equally spaced angles, in the reference
-    configuration. So s is the axial slide of the TP's lower edge relative to the MP
-    wall next to it (rigid motions of the whole joint give s = 0); s > 0: the TP went down.
-    ``cell_tags`` (MP_VOLUME, TP_VOLUME) keep each probe in its own part.
-    """
-
-    def __init__(self, u: fem.Function, joint, cell_tags, n_points: int = 16):
-        from geometry import tags
-        from solver.probes import PointProbe
-
-        z_e = joint.tp_offset
-        r_tp = 0.5 * (float(joint.tp.inner_radius(0.0)) + float(joint.tp.outer_radius(0.0)))
-        r_mp = 0.5 * (float(joint.mp.inner_radius(z_e)) + float(joint.mp.outer_radius(z_e)))
-        angles = 2 * np.pi * np.arange(n_points) / n_points
-        ring = np.column_stack([np.cos(angles), np.sin(angles), np.zeros(n_points)])
-        lift = np.array([0.0, 0.0, z_e])
-        self._tp = PointProbe(u, r_tp * ring + lift, cells=cell_tags.find(tags.TP_VOLUME))
-        self._mp = PointProbe(u, r_mp * ring + lift, cells=cell_tags.find(tags.MP_VOLUME))
-
-    def __call__(self, problem: Elastodynamics | None = None) -> dict[str, float]:
-        s = self._mp()[:, 2].mean() - self._tp()[:, 2].mean()
-        return {"settlement_mm": 1e3 * float(s)}
-
-
-def touches_top(contact, margin: float, axis: int = 2) -> bool:
-    """Whether a slave point of ``contact`` within ``margin`` [m] of the slave surface's highest
-    point along ``axis`` (reference coordinates) is in contact, on any rank: the contact band
-    has reached the upper end of the surface, above which no contact is modelled."""
-    z = contact.slave.points[:, axis]
-    comm = contact.V.mesh.comm
-    z_max = comm.allreduce(z.max() if len(z) else -np.inf, op=MPI.MAX)
-    touching = (z >= z_max - margin) & (contact.state.status != Status.OPEN)
-    return comm.allreduce(bool(touching.any()), op=MPI.LOR)
-
-
-class ContactZoneGuard:
-    """Observer for ``run`` that stops the run (RuntimeError) when the contact band reaches the
-    upper ``margin`` [m] of the slave surface (:func:`touches_top`): with a contact
-    zone (``MeshOptions.contact_axial_size`` > 0) the contact surfaces end at its top, and
-    contact beyond it would be missed. ``margin``: the zone's element height."""
-
-    def __init__(self, contact, margin: float, zone_above: float):
-        self.contact, self.margin, self.zone_above = contact, margin, zone_above
-
-    def __call__(self, problem: Elastodynamics) -> dict[str, float]:
-        if touches_top(self.contact, self.margin):
-            raise RuntimeError(
-                f"at t = {problem.t:.6g} s the contact band reached the top of the contact zone "
-                f"({self.zone_above} m above the TP's lower edge), where the contact surfaces end: "
-                "rerun with a larger mesh.contact_zone_above")
-        return {}
-
-
-def run(problem: Elastodynamics, t_end: float, dt: float, dt_min: float | None = None,
-        observers: Sequence[Observer] = (), csv_path: str | pathlib.Path | None = None,
-        progress: bool = True, growth_after: int = 4) -> list[dict[str, float]]:
-    """Integrate from problem.t to t_end [s] with nominal step dt [s].
-
-    On Newton failure the step is halved and retried; after ``growth_after`` accepted
-    steps it doubles again (up to dt). Below dt_min (default dt/64) a RuntimeError
-    names the time and step. Each accepted step records time_s, dt_s, newton_iterations
-    and every observer's values (keys carry units, e.g. settlement_mm); rows go to the
-    CSV file as they are produced. Returns the rows.
-    """
-    if not (t_end > problem.t and dt > 0):
-        raise ValueError(f"need t_end > t = {problem.t} s and dt > 0, got t_end={t_end} s, dt={dt} s")
-    dt_min = dt / 64 if dt_min is None else dt_min
-    if not 0 < dt_min <= dt:
-        raise ValueError(f"need 0 < dt_min <= dt, got dt_min={dt_min} s, dt={dt} s")
-    comm = problem.V.mesh.comm
-    bar = None
-    if progress and comm.rank == 0:
-        from tqdm import tqdm
-        bar = tqdm(total=t_end - problem.t, unit="s", bar_format="{l_bar}{bar}| {n:.4g}/{total:.4g} s {postfix}")
-    rows, writer, h, accepted = [], None, dt, 0
-    try:
-        while problem.t < t_end - 1e-12 * t_end:
-            remaining = t_end - problem.t
-            # a last step within round-off of h is taken as h: a new step size would mean a new
-            # effective operator A(dt) and its factorisation
-            step = h if abs(remaining - h) <= 1e-9 * h else min(h, remaining)
-            result = problem.step(step)
-            if not result.converged:
-                h = step / 2
-                accepted = 0
-                if h < dt_min:
-                    raise RuntimeError(f"Newton did not converge at t = {problem.t:.6g} s even with dt = {step:.3g} s "
-                                       f"(minimum step {dt_min:.3g} s): {result.message or 'no message'}; "
-                                       f"last residual norms {result.residual_norms[-3:]} N")
-                continue
-            row = {"time_s": problem.t, "dt_s": step, "newton_iterations": result.iterations}
-            for observe in observers:
-                row.update(observe(problem))
-            rows.append(row)
-            if writer is None and csv_path is not None:
-                writer = CsvWriter(csv_path, list(row), comm)
-            if writer is not None:
-                writer.write(row)
-            if bar is not None:
-                bar.update(step)
-                bar.set_postfix({k: f"{v:.4g}" for k, v in row.items() if k != "time_s"}, refresh=False)
-            accepted += 1
-            if h < dt and accepted >= growth_after:
-                h, accepted = min(2 * h, dt), 0
-    finally:
-        if writer is not None:
-            writer.close()
-        if bar is not None:
-            bar.close()
-    return rows

@@ -17,7 +17,8 @@ from typing import Any
 from mpi4py import MPI
 
 from common.case import read_case
-from solver.installation.runner import Installation, InstallationCase
+from solver.installation.runner import Installation
+from solver.installation.case import InstallationCase
 
 #: the very coarse joint (8 around, 0.25 m) with 10 mm axial elements in the contact zone
 #: (the contact band is about 20 x the settlement high) and the contact settings with which

@@ -11,7 +11,8 @@ at 'ranked 1', 'ranked 2', ... with the pull held (``[[schedule]]``).
 :func:`dismount_table` reads the run per stage: the TP's axial motion (settlement change,
 negative = the TP moved up) and whether it separated: the contact normal force at the end of
 the stage below ``separation_fraction`` of the normal force at the end of the self-weight
-stage (0 when every contact point is open). SI units: N, s, mm in the tables as named.
+stage (0 when every contact point is open); ``dismount.csv`` has the columns
+``DISMOUNT_COLUMNS``. SI units: N, s, mm in the tables as named.
 
 :func:`pull_out_force` is the rigid Coulomb estimate of the pull that frees a TP held on the
 cone half-angle alpha by the normal force N: P = N (mu cos(alpha) - sin(alpha)) (the wedge's
@@ -20,16 +21,12 @@ normal force pushes the TP up by N sin(alpha), friction holds it down by at most
 
 from __future__ import annotations
 
-import csv
 import math
-import os
 from collections.abc import Callable
 from dataclasses import dataclass
-from pathlib import Path
 from typing import Any
 
 import numpy as np
-from mpi4py import MPI
 
 DISMOUNT_COLUMNS = [
     "stage",
@@ -155,52 +152,3 @@ def dismount_table(
             }
         )
     return table
-
-
-def write_table(table: list[dict[str, Any]], path: Path, comm: MPI.Comm) -> None:
-    """``dismount.csv`` (rank 0)."""
-    if comm.rank != 0:
-        return
-    with open(path, "w", newline="") as f:
-        w = csv.writer(f)
-        w.writerow(DISMOUNT_COLUMNS)
-        for row in table:
-            w.writerow([f"{row[c]:.10g}" if isinstance(row[c], float) else row[c]
-                        for c in DISMOUNT_COLUMNS])
-
-
-def plot(history: list[dict[str, float]], table: list[dict[str, Any]], path: Path,
-         comm: MPI.Comm) -> None:
-    """Settlement and axial force against time, dismount stages shaded (rank 0)."""
-    if comm.rank != 0 or not history:
-        return
-    os.environ.setdefault("MPLBACKEND", "Agg")
-    import matplotlib.pyplot as plt
-
-    t = np.array([r["time_s"] for r in history])
-    fig, (ax, ax_f) = plt.subplots(2, 1, figsize=(9, 6), sharex=True)
-    ax.plot(t, [r["settlement_mm"] for r in history], "k-", lw=1)
-    ax.set_ylabel("settlement [mm] (down +)")
-    ax_f.plot(t, [1e-3 * r["axial_force_N"] for r in history], "tab:blue", lw=1,
-              label="axial force on the TP top (up +)")
-    ax_f.plot(t, [1e-3 * r["normal_force_N"] for r in history], "tab:red", lw=1,
-              label="contact normal force")
-    ax_f.set_xlabel("time [s]")
-    ax_f.set_ylabel("force [kN]")
-    ax_f.legend(loc="best", fontsize=8)
-    colours = {"install": "tab:green", "pull ramp": "tab:orange", "pull alone": "gold",
-               "pull + vibration": "tab:purple"}
-    seen = set()
-    for row in table:
-        for a in (ax, ax_f):
-            label = row["role"] if a is ax and row["role"] not in seen else None
-            a.axvspan(row["start_s"], row["end_s"], color=colours[row["role"]], alpha=0.15,
-                      label=label)
-        seen.add(row["role"])
-    if table:  # the dismount stages and the end of the installation before them
-        t0, t1 = table[0]["start_s"], table[-1]["end_s"]
-        ax.set_xlim(t0 - 0.3 * (t1 - t0), t1)
-    ax.legend(loc="best", fontsize=8)
-    fig.tight_layout()
-    fig.savefig(path, dpi=120)
-    plt.close(fig)

@@ -5,19 +5,15 @@ base case. :data:`VARIANTS` holds the SPEC values: friction mu_s/mu_d 0.5/0.4 (r
 0.0625/0.05, friction decay d_c 100 (reference) vs 1 s/m, damping Rayleigh (reference) vs
 modal, and the axial mesh size halved. Each variant runs the installation pipeline into its
 own sub-folder; :func:`summary_rows` collects the settlement per stage and variant and
-:func:`plot_summary` draws it. Settlement in mm, positive down (``solver.dynamics.elastodynamics.Settlement``).
+``solver.post.plots.plot_parameter_study`` draws it. Settlement in mm, positive down
+(``solver.installation.observers.Settlement``).
 """
 
 from __future__ import annotations
 
-import os
-import textwrap
 from dataclasses import dataclass
-from pathlib import Path
 from typing import Any
 
-import numpy as np
-from mpi4py import MPI
 
 
 @dataclass(frozen=True)
@@ -98,35 +94,3 @@ def summary_rows(variant: Variant, stages: list[dict[str, Any]], excitations, st
         }
         for s in stages
     ]
-
-
-def plot_summary(rows: list[dict[str, Any]], path: Path, comm: MPI.Comm) -> None:
-    """Settlement gained per stage (grouped bars) for each variant (rank 0)."""
-    if comm.rank != 0 or not rows:
-        return
-    os.environ.setdefault("MPLBACKEND", "Agg")
-    import matplotlib.pyplot as plt
-
-    names = list(dict.fromkeys(r["variant"] for r in rows))
-    n_stages = 1 + max(r["stage"] for r in rows)
-    width = 0.8 / n_stages
-    fig, ax = plt.subplots(figsize=(max(6, 1.8 * len(names)), 4.5))
-    x = np.arange(len(names))
-    for k in range(n_stages):
-        gain = [next((r["gained_mm"] for r in rows if r["variant"] == n and r["stage"] == k),
-                     np.nan) for n in names]
-        label = next((f"{r['role'] or r['name']}" + (f" ({r['frequency_Hz']:.0f} Hz)"
-                                                      if r["frequency_Hz"] else "")
-                      for r in rows if r["stage"] == k and r["variant"] == names[0]), f"stage {k}")
-        ax.bar(x + (k - 0.5 * (n_stages - 1)) * width, gain, width, label=label)
-    labels = [next(f"{r['variant']}\n{textwrap.fill(r['value'], 20)}"
-                   + ("" if r["status"] == "done" else f"\n[{r['status']}]")
-                   for r in rows if r["variant"] == n) for n in names]
-    ax.set_xticks(x, labels, fontsize=7)
-    ax.set_ylabel("settlement gained in the stage [mm]")
-    ax.set_title("one-at-a-time parameter study (legend: stages of the base case)")
-    ax.axhline(0.0, color="k", lw=0.5)
-    ax.legend(fontsize=7)
-    fig.tight_layout()
-    fig.savefig(path, dpi=120)
-    plt.close(fig)

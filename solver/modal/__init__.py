@@ -5,7 +5,8 @@
 ``interface``   interface stiffness of the contact at a fixed status, bonded band
 ``classify``    (m, n) wave numbers of a mode shape
 ``indicators``  energy shares, participation, interface slip of a mode
-``ranking``     ModeRecord per mode, the ranking, modes.csv, pictures, ParaView files
+``ranking``     ModeRecord per mode and the ranking by resonant interface slip
+``outputs``     modes.csv, the printed table, mode pictures and ParaView files
 ``joint``       the installed joint's modes from a case's [modal] table
 ==============  ==================================================================
 """

@@ -1,4 +1,4 @@
-"""Table, pictures and ParaView files of a modal analysis of the joint.
+"""Ranking of the joint's modes by how useful each is for settling the joint.
 
 One ``ModeRecord`` per mode: frequency, (m, n) of each part and of the part that
 dominates the kinetic energy, and the settlement indicators of
@@ -17,17 +17,10 @@ excitation frequency. Members of a degenerate pair (equal frequencies, cos/sin
 orientations) share the pair's combined indicator and rank.
 """
 
-import csv
-import os
-from collections.abc import Mapping
-from dataclasses import asdict, dataclass
-from pathlib import Path
-
-from common import backend  # noqa: F401  (before dolfinx)
+from dataclasses import dataclass
 
 import numpy as np
-from dolfinx import fem, io, plot
-from mpi4py import MPI
+from dolfinx import fem
 
 from common.material import Material
 from solver.modal.eigen import ModalResult
@@ -161,129 +154,3 @@ def describe_modes(
     distinct = np.unique(np.round(-score, 12))
     rank = 1 + np.searchsorted(distinct, np.round(-score, 12))
     return [ModeRecord(**r, rank=int(k)) for r, k in zip(rows, rank)]
-
-
-def write_csv(records: list[ModeRecord], path: str | Path, comm: MPI.Comm) -> None:
-    """CSV with a header naming units (rank 0 writes)."""
-    if comm.rank == 0 and records:
-        with open(path, "w", newline="") as f:
-            writer = csv.DictWriter(f, fieldnames=list(asdict(records[0])))
-            writer.writeheader()
-            for r in records:
-                writer.writerow(
-                    {k: (f"{v:.6g}" if isinstance(v, float) else v) for k, v in asdict(r).items()}
-                )
-
-
-def format_table(records: list[ModeRecord]) -> str:
-    """Human-readable table of the records (participations in 1/sqrt(kg), slips in um)."""
-    head = (
-        f"{'mode':>4} {'f [Hz]':>9} {'m':>2} {'n':>2} {'part':>4} {'MP m,n':>7} {'TP m,n':>7} "
-        f"{'KE_TP':>5} {'Gax_face':>8} {'Glat_face':>9} {'Gax_pt':>8} {'Glat_pt':>8} {'slip':>8} "
-        f"{'s_ax[um]':>9} {'s_lat[um]':>9} {'rank':>4}"
-    )
-    lines = [head]
-    for r in records:
-        lines.append(
-            f"{r.mode:4d} {r.frequency_Hz:9.2f} {r.m:2d} {r.n:2d} {r.dominant_part:>4} "
-            f"{f'{r.m_MP},{r.n_MP}':>7} {f'{r.m_TP},{r.n_TP}':>7} {r.kinetic_share_TP:5.2f} "
-            f"{r.participation_axial_face_per_sqrtkg:8.1e} "
-            f"{r.participation_lateral_face_per_sqrtkg:9.1e} "
-            f"{r.participation_axial_point_per_sqrtkg:8.1e} "
-            f"{r.participation_lateral_point_per_sqrtkg:8.1e} "
-            f"{r.interface_slip_rms_per_sqrtkg:8.1e} {r.resonant_slip_axial_um:9.3g} "
-            f"{r.resonant_slip_lateral_um:9.3g} {r.rank:4d}"
-        )
-    return "\n".join(lines)
-
-
-def write_paraview(result: ModalResult, path: str | Path) -> Path:
-    """All mode shapes in one VTX (.bp) file; 'time' is the mode number (1, 2, ...)."""
-    path = Path(path).with_suffix(".bp")
-    shape = fem.Function(result.V, name="mode_shape")
-    with io.VTXWriter(result.V.mesh.comm, path, [shape], engine="BP4") as writer:
-        for i, u in enumerate(result.modes):
-            shape.x.array[:] = u.x.array
-            writer.write(float(i + 1))
-    return path
-
-
-def plot_modes(
-    result: ModalResult,
-    records: list[ModeRecord],
-    path: str | Path,
-    n_cols: int = 5,
-    window: tuple[int, int] = (1600, 1000),
-) -> None:
-    """PNG grid of the deformed shapes, coloured by |u| and labelled f, m, n (rank 0 draws)."""
-    os.environ.setdefault("PYVISTA_OFF_SCREEN", "true")
-    if not os.environ.get("DISPLAY"):  # headless: VTK would try X first and print a warning
-        os.environ.setdefault("VTK_DEFAULT_OPENGL_WINDOW", "vtkEGLRenderWindow")
-    V = result.V
-    comm = V.mesh.comm
-    topology, cell_types, x = plot.vtk_mesh(V)
-    n_nodes = x.shape[0]
-    pieces = comm.gather(
-        (topology, cell_types, x, [u.x.array.reshape(-1, 3)[:n_nodes] for u in result.modes])
-    )
-    if comm.rank != 0:
-        return
-    import pyvista
-
-    pyvista.OFF_SCREEN = True
-    offset, topo, types, xs = 0, [], [], []
-    shapes = [[] for _ in result.modes]
-    for t, c, xx, us in pieces:
-        # topology: [n, i0, ..., in-1, n, ...]; shift node indices by the offset
-        t = t.copy().reshape(len(c), -1)
-        t[:, 1:] += offset
-        topo.append(t.ravel())
-        types.append(c)
-        xs.append(xx)
-        for k, u in enumerate(us):
-            shapes[k].append(u)
-        offset += len(xx)
-    grid = pyvista.UnstructuredGrid(np.concatenate(topo), np.concatenate(types), np.concatenate(xs))
-    size = np.ptp(grid.points, axis=0).max()
-    n_rows = int(np.ceil(len(records) / n_cols))
-    plotter = pyvista.Plotter(
-        shape=(n_rows, n_cols), off_screen=True, window_size=window, border=False
-    )
-    for k, r in enumerate(records):
-        u = np.concatenate(shapes[k])
-        grid.point_data["u"] = u
-        grid.point_data["|u|"] = np.linalg.norm(u, axis=1)
-        warped = grid.warp_by_vector("u", factor=0.1 * size / max(np.abs(u).max(), 1e-300))
-        plotter.subplot(k // n_cols, k % n_cols)
-        plotter.add_mesh(
-            warped.extract_surface(algorithm="dataset_surface", nonlinear_subdivision=1),
-            scalars="|u|",
-            cmap="viridis",
-            show_scalar_bar=False,
-        )
-        plotter.add_text(
-            f"{r.mode}: {r.frequency_Hz:.1f} Hz  m={r.m} n={r.n} ({r.dominant_part})", font_size=8
-        )
-        plotter.view_isometric()
-    plotter.screenshot(str(path))
-    plotter.close()
-
-
-def write_outputs(
-    result: ModalResult,
-    records: list[ModeRecord],
-    folder: str | Path,
-    names: Mapping[str, str] | None = None,
-) -> dict[str, Path]:
-    """CSV, PNG and VTX files of a modal analysis in ``folder``; returns their paths."""
-    names = {"csv": "modes.csv", "png": "modes.png", "vtx": "modes.bp", **(names or {})}
-    folder = Path(folder)
-    comm = result.V.mesh.comm
-    if comm.rank == 0:
-        folder.mkdir(parents=True, exist_ok=True)
-    comm.barrier()
-    paths = {k: folder / v for k, v in names.items()}
-    write_csv(records, paths["csv"], comm)
-    plot_modes(result, records, paths["png"])
-    write_paraview(result, paths["vtx"])
-    return paths

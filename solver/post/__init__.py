@@ -1,1 +1,2 @@
-"""Outputs of the runs: reports of an installation run (``report``)."""
+"""Outputs of the runs: the one CSV writer (``csv``), reports of an installation run
+(``report``), pictures (``plots``) and ParaView files (``paraview``)."""

@@ -1,6 +1,8 @@
-"""Outputs of an installation run: history and stage tables, events, plots, ParaView, summary.
+"""Reports of an installation run: stage summaries, stick-slip events, frequency selectivity,
+the tables and the printed summary.
 
-Files (in the output folder; CSV headers carry units):
+Files of a run (in the output folder; CSV headers carry units; the pictures are
+``solver.post.plots``', the ParaView files ``solver.post.paraview``'s):
 
 * ``history.csv``: one row per accepted time step (``HISTORY_COLUMNS``);
 * ``stages.csv``: one row per stage (settlement gained, stick-slip events, ...);
@@ -18,8 +20,7 @@ excitation period in vibration stages (one step otherwise), exceeds ``slip_rate_
 an event is a transition from below to above that rate.
 """
 
-import csv
-import os
+from dataclasses import asdict
 from pathlib import Path
 from typing import Any
 
@@ -27,6 +28,7 @@ import numpy as np
 from mpi4py import MPI
 
 from solver.contact import NitscheContact, Status
+from solver.post.csv import write_csv
 
 HISTORY_COLUMNS = [
     "time_s",
@@ -64,34 +66,6 @@ STAGE_COLUMNS = [
 
 LATE = 0.2  #: SPEC 5.2 "each event stabilises": the last LATE of a stage ...
 LATE_SHARE = 0.05  #: ... adds less than LATE_SHARE of the stage's gain [-]
-
-
-def _fmt(v: Any) -> str:
-    return f"{v:.10g}" if isinstance(v, float) else str(v)
-
-
-class HistoryWriter:
-    """``history.csv`` written per row (rank 0), starting with ``rows`` already known (resume)."""
-
-    def __init__(self, path: Path, comm: MPI.Comm, rows: list[dict[str, float]] = ()):
-        self._file = None
-        if comm.rank == 0:
-            path.parent.mkdir(parents=True, exist_ok=True)
-            self._file = open(path, "w", newline="")
-            self._writer = csv.writer(self._file)
-            self._writer.writerow(HISTORY_COLUMNS)
-            for row in rows:
-                self.write(row)
-
-    def write(self, row: dict[str, float]) -> None:
-        if self._file is not None:
-            self._writer.writerow([_fmt(row[c]) for c in HISTORY_COLUMNS])
-            self._file.flush()
-
-    def close(self) -> None:
-        if self._file is not None:
-            self._file.close()
-            self._file = None
 
 
 def stick_slip_events(
@@ -153,31 +127,17 @@ def stage_summary(
     }
 
 
-def write_table(rows: list[dict], columns: list[str], path: Path, comm: MPI.Comm) -> None:
-    if comm.rank == 0:
-        path.parent.mkdir(parents=True, exist_ok=True)
-        with open(path, "w", newline="") as f:
-            w = csv.writer(f)
-            w.writerow(columns)
-            for r in rows:
-                w.writerow([_fmt(r[c]) for c in columns])
-
-
 def write_stage_table(stages: list[dict], path: Path, comm: MPI.Comm) -> None:
-    write_table(stages, STAGE_COLUMNS, path, comm)
+    """``stages.csv``: one row per stage (``STAGE_COLUMNS``)."""
+    write_csv(path, STAGE_COLUMNS, stages, comm)
+
+
+CHOICE_COLUMNS = ["frequency_Hz", "amplitude_N", "role", "mode", "m", "n", "rank", "reason"]
 
 
 def write_choice(excitations, path: Path, comm: MPI.Comm) -> None:
     """``frequencies.csv``: frequency_Hz, amplitude_N, role, mode, m, n, rank, reason."""
-    from dataclasses import asdict
-
-    rows = [asdict(e) for e in excitations]
-    write_table(
-        rows,
-        ["frequency_Hz", "amplitude_N", "role", "mode", "m", "n", "rank", "reason"],
-        path,
-        comm,
-    )
+    write_csv(path, CHOICE_COLUMNS, [asdict(e) for e in excitations], comm)
 
 
 def format_stage(s: dict) -> str:
@@ -334,111 +294,6 @@ def write_summary(summary: dict, stages, excitations, path: Path, comm: MPI.Comm
         path.write_text(format_summary(summary, stages, excitations) + "\n")
 
 
-def write_state(model, folder: Path, name: str, k: int) -> None:
-    """Displacement (VTX, time = simulated time) and contact points (.vtp) after stage k."""
-    from dolfinx import io
-
-    u = model.problem.u
-    with io.VTXWriter(model.comm, folder / f"displacement_{k}.bp", [u], engine="BP4") as writer:
-        writer.write(model.problem.t)
-    write_contact_points(model.contact, folder / f"contact_{k}.vtp")
-
-
-def write_contact_points(contact: NitscheContact, path) -> None:
-    """Write the slave points with their state as VTK PolyData (.vtp) for ParaView (rank 0 writes).
-
-    Point data: status (0 open, 1 stick, 2 slip), gap_m, pressure_Pa,
-    tangential_traction_Pa (vector), slip_velocity_m_s (vector), at the deformed points.
-    """
-    comm = contact.V.mesh.comm
-    st = contact.state
-    fields = {
-        "status": st.status.astype(np.int32),
-        "gap_m": st.gap,
-        "pressure_Pa": st.pressure,
-        "tangential_traction_Pa": st.tangential_traction,
-        "slip_velocity_m_s": st.slip_velocity,
-    }
-    points = comm.gather(st.coordinates, root=0)
-    data = {name: comm.gather(a, root=0) for name, a in fields.items()}
-    if comm.rank == 0:
-        import pyvista
-
-        cloud = pyvista.PolyData(np.concatenate(points))
-        for name, parts in data.items():
-            cloud.point_data[name] = np.concatenate(parts)
-        cloud.save(str(path))
-
-
-def plot_contact_status(contact: NitscheContact, joint, path: Path, title: str) -> None:
-    """Contact status of the slave points: angle [deg] against height above the TP's end [mm]."""
-    comm = contact.V.mesh.comm
-    st = contact.state
-    x = comm.gather(contact.slave.points, root=0)
-    status = comm.gather(st.status, root=0)
-    if comm.rank != 0:
-        return
-    os.environ.setdefault("MPLBACKEND", "Agg")
-    import matplotlib.pyplot as plt
-
-    x, status = np.concatenate(x), np.concatenate(status)
-    theta = np.degrees(np.arctan2(x[:, 1], x[:, 0])) % 360
-    z = 1e3 * (x[:, 2] - joint.tp_offset)
-    fig, ax = plt.subplots(figsize=(8, 4))
-    for s, colour in (
-        (Status.OPEN, "lightgrey"),
-        (Status.STICK, "tab:blue"),
-        (Status.SLIP, "tab:red"),
-    ):
-        sel = status == s
-        ax.scatter(
-            theta[sel], z[sel], s=4, c=colour, label=f"{s.name.lower()} ({np.count_nonzero(sel)})"
-        )
-    ax.set_xlabel("angle [deg]")
-    ax.set_ylabel("height above the TP lower end [mm]")
-    ax.set_title(f"contact status {title}")
-    ax.legend(loc="upper right", markerscale=3)
-    fig.tight_layout()
-    fig.savefig(path, dpi=120)
-    plt.close(fig)
-
-
-def plot_history(history: list[dict], stages: list[dict], folder: Path, comm: MPI.Comm) -> None:
-    """settlement.png and stage_gain.png (rank 0)."""
-    if comm.rank != 0 or not history:
-        return
-    os.environ.setdefault("MPLBACKEND", "Agg")
-    import matplotlib.pyplot as plt
-
-    t = np.array([r["time_s"] for r in history])
-    fig, ax = plt.subplots(figsize=(9, 4))
-    ax.plot(t, [r["settlement_mm"] for r in history], "k-", lw=1)
-    ax.set_xlabel("time [s]")
-    ax.set_ylabel("settlement [mm]")
-    ax2 = ax.twinx()
-    ax2.plot(t, [r["frequency_Hz"] for r in history], "tab:orange", lw=1)
-    ax2.set_ylabel("excitation frequency [Hz]", color="tab:orange")
-    fig.tight_layout()
-    fig.savefig(folder / "settlement.png", dpi=120)
-    plt.close(fig)
-    vib = [s for s in stages if s["frequency_Hz"] > 0]
-    fig, ax = plt.subplots(figsize=(6, 4))
-    if vib:
-        ax.bar([s["frequency_Hz"] for s in vib], [1e3 * s["gained_mm"] for s in vib], width=3.0)
-        for s in vib:
-            ax.annotate(
-                s["name"].split()[-1],
-                (s["frequency_Hz"], 1e3 * s["gained_mm"]),
-                ha="center",
-                va="bottom",
-            )
-    ax.set_xlabel("excitation frequency [Hz]")
-    ax.set_ylabel("settlement gained in the stage [um]")
-    fig.tight_layout()
-    fig.savefig(folder / "stage_gain.png", dpi=120)
-    plt.close(fig)
-
-
 SWEEP_COLUMNS = ["time_s", "frequency_Hz", "amplitude_N", "settlement_mm", "settlement_gain_mm"]
 
 
@@ -459,41 +314,3 @@ def sweep_rows(history: list[dict], first_stage: int = 1) -> list[dict[str, floa
         for r in history
         if r["stage"] >= first_stage
     ]
-
-
-def plot_sweep(
-    rows: list[dict], stages: list[dict], natural_hz: list[float], path: Path, comm: MPI.Comm
-) -> None:
-    """Settlement gained in the sweep against time (with the frequency) and against the
-    excitation frequency, with the natural frequencies of the settled joint (rank 0)."""
-    if comm.rank != 0 or not rows:
-        return
-    os.environ.setdefault("MPLBACKEND", "Agg")
-    import matplotlib.pyplot as plt
-
-    t = np.array([r["time_s"] for r in rows])
-    f = np.array([r["frequency_Hz"] for r in rows])
-    gain = np.array([r["settlement_gain_mm"] for r in rows])
-    fig, (ax_t, ax_f) = plt.subplots(1, 2, figsize=(12, 4.2))
-    ax_t.plot(t, gain, "k-", lw=1)
-    ax_t.set_xlabel("time [s]")
-    ax_t.set_ylabel("settlement gained in the sweep [mm]")
-    twin = ax_t.twinx()
-    twin.plot(t, f, color="tab:orange", lw=1)
-    twin.set_ylabel("excitation frequency [Hz]", color="tab:orange")
-    ax_f.plot(f, gain, "k.-", lw=0.6, ms=2, label="settlement")
-    steps = [s for s in stages[1:] if s["steps"]]
-    if steps and all(s["frequency_Hz"] > 0 for s in steps):
-        ax_f.bar([s["frequency_Hz"] for s in steps], [s["gained_mm"] for s in steps],
-                 width=0.4 * min(np.diff([s["frequency_Hz"] for s in steps]), default=10.0),
-                 alpha=0.3, label="gained per stage")
-    lo, hi = f.min(), f.max()
-    for k, fn in enumerate(x for x in natural_hz if lo <= x <= hi):
-        label = "natural frequency" if k == 0 else None
-        ax_f.axvline(fn, color="tab:blue", ls=":", lw=0.8, label=label)
-    ax_f.set_xlabel("excitation frequency [Hz]")
-    ax_f.set_ylabel("settlement gained [mm]")
-    ax_f.legend(loc="best", fontsize=8)
-    fig.tight_layout()
-    fig.savefig(path, dpi=120)
-    plt.close(fig)

@@ -1,0 +1,61 @@
+"""Linear-algebra pieces of the Newton solver and the time stepping: LU solvers, the block-LU
+preconditioner of A + J_c and the operator A + J without products with A (PETSc python
+contexts).
+"""
+
+import numpy as np
+from petsc4py import PETSc
+
+__all__ = ["BlockLU", "SumOperator"]
+
+
+class BlockLU:
+    """Preconditioner (PETSc python PC context) applying the LU factors of P = A + J_P, or with
+    a zone those of its (zone, zone) block and the identity elsewhere, which is P^-1 itself
+    when A is block diagonal with identity rows off the zone and J lives in the zone
+    (``solver.dynamics.condensation``). ``zone``: this rank's zone dofs as local indices.
+
+    It remembers its last input v and output z = P^-1 v, for ``SumOperator``."""
+
+    def __init__(self, lu: PETSc.KSP, zone: np.ndarray | None):
+        self.lu, self.zone = lu, zone
+        self.last: tuple[int, PETSc.Vec] | None = None  # (handle of z, v)
+        self._vz = self._zz = None
+
+    def setUp(self, pc):  # the factorisation is ContactNewtonSolver._factorise's
+        if self.zone is not None and self._vz is None:
+            self._vz, self._zz = self.lu.getOperators()[0].createVecs()
+
+    def apply(self, pc, v, z):
+        if self.zone is None:
+            self.lu.solve(v, z)
+        else:
+            v.copy(z)
+            self._vz.array[:] = v.array_r[self.zone]
+            self.lu.solve(self._vz, self._zz)
+            z.array[self.zone] = self._zz.array_r
+        self.last = (z.handle, v)
+
+
+class SumOperator:
+    """Action of A + J (PETSc python matrix context). FGMRES multiplies each preconditioned
+    vector z = P^-1 v right after making it; then (A + J) z = v + (J - J_P) z, with J_P the
+    Jacobian in the factorised P = A + J_P, which needs no product with A (the bulk of the
+    work; J lives on the interface). Round-off: that of the LU solve's residual."""
+
+    def __init__(self, A: PETSc.Mat, J: PETSc.Mat, J_P: PETSc.Mat, preconditioner: BlockLU):
+        self.A, self.J, self.J_P, self.preconditioner = A, J, J_P, preconditioner
+        self._work = J.createVecLeft()
+
+    def mult(self, mat, x, y):
+        last = self.preconditioner.last
+        if last is not None and last[0] == x.handle:
+            self.J.multAdd(x, last[1], y)
+            self.J_P.mult(x, self._work)
+            y.axpy(-1.0, self._work)
+        else:
+            self.A.mult(x, y)
+            self.J.multAdd(x, y, y)
+
+    def destroy(self, mat):
+        self._work.destroy()

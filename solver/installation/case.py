@@ -1,0 +1,170 @@
+"""The case of an installation run: every table of a case file, checked as a whole before
+anything is computed (:meth:`InstallationCase.from_dict`)."""
+
+from __future__ import annotations
+
+from dataclasses import asdict, dataclass, field
+from pathlib import Path
+from typing import Any
+
+from common.case import construct
+from common.material import Material
+from geometry.contact_map import tp_placement
+from geometry.imperfections import RadialDeviation
+from geometry.parameters import JointGeometry, MeshOptions, geometry_from_case
+from solver.contact import FrictionLaw
+from solver.dynamics.loads import Schedule
+from solver.installation.settings import (
+    ContactSettings,
+    DampingSettings,
+    ImperfectionSettings,
+    OutputSettings,
+    SelfWeightSettings,
+    StaticForceSettings,
+    TimeSettings,
+    VibrationSettings,
+)
+
+
+SECTIONS = {
+    "contact": ContactSettings,
+    "damping": DampingSettings,
+    "time": TimeSettings,
+    "self_weight": SelfWeightSettings,
+    "vibration": VibrationSettings,
+    "output": OutputSettings,
+    "static_force": StaticForceSettings,
+}
+KNOWN_TABLES = {
+    "imperfections",
+    "geometry",
+    "material",
+    "mesh",
+    "friction",
+    "schedule",
+    "modal",
+    "_source",
+    *SECTIONS,
+}
+
+
+@dataclass(frozen=True)
+class InstallationCase:
+    """Everything an installation run reads from a case (validated on construction)."""
+
+    joint: JointGeometry
+    material: Material
+    mesh: MeshOptions
+    friction: FrictionLaw
+    contact: ContactSettings
+    damping: DampingSettings
+    time: TimeSettings
+    self_weight: SelfWeightSettings
+    vibration: VibrationSettings
+    output: OutputSettings
+    static_force: StaticForceSettings
+    schedule: Schedule | None  #: explicit [[schedule]] (start time 0: shifted after self-weight)
+    source: str = "case"
+    imperfections: dict[str, ImperfectionSettings] = field(default_factory=dict)
+
+    @classmethod
+    def from_dict(cls, case: dict[str, Any]) -> InstallationCase:
+        """Check every table of ``case`` (``read_case``); a ValueError names the problem."""
+        source = case.get("_source", "case")
+        try:
+            unknown = set(case) - KNOWN_TABLES
+            if unknown:
+                raise ValueError(
+                    f"unknown table(s) {sorted(unknown)}; "
+                    f"expected some of {sorted(KNOWN_TABLES - {'_source'})}"
+                )
+            joint, material, mesh = geometry_from_case(case)
+            settings = {}
+            for name, kind in SECTIONS.items():
+                data = dict(case.get(name, {}))
+                if not isinstance(case.get(name, {}), dict):
+                    raise ValueError(f"[{name}] must be a table")
+                if "lead_in_hz" in data:
+                    data["lead_in_hz"] = tuple(data["lead_in_hz"])
+                settings[name] = construct(kind, data, name)
+            friction = construct(FrictionLaw, dict(case.get("friction", {})), "friction")
+            schedule = Schedule.from_dicts(case["schedule"]) if "schedule" in case else None
+            vib = settings["vibration"]
+            if schedule is not None:
+                for i, s in enumerate(schedule.stages):
+                    if s.mode_number is not None and s.mode_number > vib.n_modes:
+                        raise ValueError(
+                            f"schedule stage {i + 1} asks for mode {s.mode_number} but the modal "
+                            f"stage computes {vib.n_modes} (vibration.n_modes)"
+                        )
+                    if s.ranked_number is not None and s.ranked_number > vib.n_frequencies:
+                        raise ValueError(
+                            f"schedule stage {i + 1} asks for ranked {s.ranked_number} but "
+                            f"{vib.n_frequencies} ranked frequencies are chosen "
+                            "(vibration.n_frequencies)"
+                        )
+            if not vib.modal_stage and (schedule is None or schedule.needs_modes):
+                raise ValueError(
+                    "vibration.modal_stage = false needs a [[schedule]] without 'mode k' or "
+                    "'ranked k' stages (the automatic schedule comes from the modal stage)"
+                )
+            imperfections = _imperfections(case, joint)
+            if vib.forcing == "shaker" and not 0 <= vib.shaker_height_m <= joint.tp.total_length:
+                raise ValueError(
+                    f"[vibration] shaker_height_m = {vib.shaker_height_m} m lies outside the TP "
+                    f"(0 .. {joint.tp.total_length} m)"
+                )
+        except ValueError as e:
+            raise ValueError(f"{source}: {e}") from None
+        return cls(
+            joint,
+            material,
+            mesh,
+            friction,
+            schedule=schedule,
+            source=source,
+            imperfections=imperfections,
+            **settings,
+        )
+
+    def deviations(self) -> dict[str, RadialDeviation]:
+        """The radial deviations of the imperfect parts (``geometry.imperfections``)."""
+        case_dir = Path(self.source).parent
+        return {
+            name: setting.deviation(getattr(self.joint, name), case_dir)
+            for name, setting in self.imperfections.items()
+        }
+
+    def describe(self) -> dict[str, Any]:
+        """Plain-data summary of the settings (written to the output folder)."""
+        out = {name: asdict(getattr(self, name)) for name in ("mesh", "friction", *SECTIONS)}
+        out["material"] = asdict(self.material)
+        out["imperfections"] = {k: asdict(v) for k, v in self.imperfections.items()}
+        out["source"] = self.source
+        return out
+
+
+def _imperfections(case: dict[str, Any], joint: JointGeometry) -> dict[str, ImperfectionSettings]:
+    """The ``[imperfections]`` tables, checked (files read) and placed (first contact found)."""
+    table = case.get("imperfections", {})
+    if not isinstance(table, dict) or set(table) - {"mp", "tp"}:
+        raise ValueError(
+            "[imperfections] must hold the tables [imperfections.mp] and/or [imperfections.tp]"
+        )
+    settings = {
+        name: construct(ImperfectionSettings, dict(data), f"imperfections.{name}")
+        for name, data in table.items()
+    }
+    case_dir = Path(case.get("_source", ".")).parent
+    deviations = {}
+    for name, setting in settings.items():
+        try:
+            deviations[name] = setting.deviation(getattr(joint, name), case_dir)
+        except ValueError as e:
+            raise ValueError(f"[imperfections.{name}] {e}") from None
+    if deviations:
+        try:
+            tp_placement(joint, deviations)
+        except ValueError as e:
+            raise ValueError(f"[imperfections] {e}") from None
+    return settings

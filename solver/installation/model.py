@@ -1,0 +1,212 @@
+"""The joint of an installation case, set up for time stepping: mesh, space, clamp, matrices,
+contact, damping, loads and the time-stepping problem (:func:`set_up_joint_model`); the modes
+of the settled joint (:func:`settled_modes`) and the vibration forcing
+(:func:`attach_vibration`)."""
+
+from __future__ import annotations
+
+import time
+from collections.abc import Callable
+from dataclasses import dataclass, field
+from typing import Any
+
+import numpy as np
+from dolfinx import fem
+from mpi4py import MPI
+from petsc4py import PETSc
+
+from geometry import tags
+from geometry.contact_map import tp_placement
+from geometry.mesh import create_joint_mesh
+from solver.contact import NitscheContact, Status
+from solver.dynamics.damping import ModalDamping, RayleighDamping
+from solver.dynamics.elastodynamics import Elastodynamics, StepResult, assemble_structure
+from solver.dynamics.loads import PointLoad, Schedule, TopFaceLoad, TPLoading, shaker_point
+from solver.dynamics.schemes import scheme_from_name
+from solver.installation.case import InstallationCase
+from solver.installation.observers import Settlement
+from solver.modal.eigen import EigenOptions, ModalResult, clamp, modal_analysis
+from solver.modal.interface import ContactInterface, bonded_band
+
+
+@dataclass(frozen=True)
+class PlacedJoint:
+    """The joint's parts with the TP's lower end at ``tp_offset`` [m] as meshed: at the first
+    contact of the (imperfect) surfaces, ``geometry.contact_map.tp_placement``. Used where a
+    position on the TP is needed (settlement probes, point forces, plots)."""
+
+    mp: Any
+    tp: Any
+    tp_offset: float
+
+
+class InstallationProblem(Elastodynamics):
+    """Elastodynamics that remembers the last step's result (Newton iterations for the history)."""
+
+    last_result: StepResult | None = None
+
+    def step(self, dt: float) -> StepResult:
+        self.last_result = super().step(dt)
+        return self.last_result
+
+    def refresh_load(self) -> None:
+        """Re-evaluate the load at the current time (after the load callable was changed)."""
+        self._evaluate_load(self.t, self._f_old)
+
+    def rebuild_solver(self) -> None:
+        """Drop the factorisation and Newton workspace: the next step starts afresh."""
+        self._dt_of_A = None
+
+
+@dataclass
+class JointModel:
+    """Mesh, space, clamp, matrices, contact, loads and the time-stepping problem of a case."""
+
+    case: InstallationCase
+    mesh_data: Any
+    V: fem.FunctionSpace
+    bcs: list
+    contact: NitscheContact
+    top: TopFaceLoad
+    static: Callable[[float], float]  #: static axial force [N] against time [s]
+    problem: InstallationProblem
+    settlement: Settlement
+    damping: RayleighDamping | ModalDamping
+    placed: PlacedJoint
+    timings_s: dict[str, float] = field(default_factory=dict)
+
+    @property
+    def comm(self) -> MPI.Comm:
+        return self.V.mesh.comm
+
+    @property
+    def n_dofs(self) -> int:
+        return self.V.dofmap.index_map.size_global * self.V.dofmap.index_map_bs
+
+
+def _lu_package(choice: str, comm: MPI.Comm) -> str:
+    """The PETSc LU package of ``[contact] lu_solver`` ("auto": MUMPS on one rank, SuperLU_DIST,
+    which repeats its arithmetic, on several if PETSc has it)."""
+    if choice != "auto":
+        return choice
+    several = comm.size > 1 and PETSc.Sys.hasExternalPackage("superlu_dist")
+    return "superlu_dist" if several else "mumps"
+
+
+def set_up_joint_model(comm: MPI.Comm, case: InstallationCase) -> JointModel:
+    """Set up the joint of ``case`` at rest in its first-contact position (collective)."""
+    t0 = time.perf_counter()
+    deviations = case.deviations()
+    placed = PlacedJoint(case.joint.mp, case.joint.tp, tp_placement(case.joint, deviations))
+    mesh_data = create_joint_mesh(comm, case.joint, case.mesh, deviations)
+    V = fem.functionspace(mesh_data.mesh, ("Lagrange", case.contact.degree, (3,)))
+    bcs = [clamp(V, mesh_data.facet_tags, [tags.MP_CLAMPED])]
+    M, K = assemble_structure(V, case.material, bcs)
+    contact = NitscheContact(
+        V,
+        mesh_data.facet_tags,
+        getattr(tags, case.contact.slave),
+        getattr(tags, case.contact.master),
+        case.material,
+        case.friction,
+        gamma0=case.contact.gamma0,
+        theta=case.contact.theta,
+        lagged_friction=case.contact.lagged_friction,
+    )
+    d = case.damping
+    if d.model == "rayleigh":
+        damping = RayleighDamping.at_frequency(d.zeta, d.frequency_hz)
+    else:
+        band = bonded_band(
+            V, mesh_data.facet_tags, case.material, d.band_height, case.contact.gamma0
+        )
+        modes = modal_analysis(V, case.material, bcs, [band], EigenOptions(n_modes=d.n_modes))
+        damping = ModalDamping(
+            M, [u.x.petsc_vec for u in modes.modes], modes.frequencies_hz, d.zeta
+        )
+        damping.check_step(case.self_weight.dt_s)  # explicit in time: fail before the time loop
+    sw = case.self_weight
+    static = case.static_force.history(sw)
+    top = TopFaceLoad(V, mesh_data.facet_tags, tags.TP_TOP)
+    problem = InstallationProblem(
+        V,
+        M,
+        K,
+        bcs,
+        load=TPLoading(top, static_axial=static),
+        scheme=scheme_from_name(sw.scheme or case.time.scheme, case.time.rho_inf),
+        damping=damping,
+        contact=contact,
+        newton_options={
+            "max_iterations": case.contact.max_iterations,
+            "max_backtracks": case.contact.max_backtracks,
+            "max_gap_change": case.contact.max_gap_change or None,
+            "lu_solver": _lu_package(case.contact.lu_solver, comm),
+        },
+        condense_bulk=case.contact.condense_bulk,
+    )
+    problem.initialise(0.0)
+    settlement = Settlement(problem.u, placed, mesh_data.cell_tags)
+    return JointModel(
+        case,
+        mesh_data,
+        V,
+        bcs,
+        contact,
+        top,
+        static,
+        problem,
+        settlement,
+        damping,
+        placed,
+        {"set-up": time.perf_counter() - t0},
+    )
+
+
+def settled_modes(model: JointModel, n_modes: int) -> tuple[ModalResult, ContactInterface]:
+    """The ``n_modes`` lowest modes of the joint in its current contact state (collective).
+
+    Small vibrations about the settled, resting joint: every slave point in contact is tied
+    normally and tangentially (STICK), the others are free. (A point that slipped in the
+    last step is at rest now; tying only its normal motion would let the TP slide and rock
+    on the thin contact band: spurious modes near 0 Hz.) The interface tangent is the
+    symmetric Nitsche one (theta = 1) at the same pairing, as the eigenproblem needs.
+    """
+    contact, c = model.contact, model.case.contact
+    if contact.theta != 1:
+        contact = NitscheContact(
+            model.V,
+            model.mesh_data.facet_tags,
+            getattr(tags, c.slave),
+            getattr(tags, c.master),
+            model.case.material,
+            model.case.friction,
+            gamma0=c.gamma0,
+            theta=1,
+        )
+        contact.update(model.problem.u)
+    status = np.where(model.contact.state.status == Status.OPEN, Status.OPEN, Status.STICK)
+    interface = ContactInterface(contact, status)
+    result = modal_analysis(
+        model.V, model.case.material, model.bcs, [interface], EigenOptions(n_modes=n_modes)
+    )
+    return result, interface
+
+
+def attach_vibration(model: JointModel, schedule: Schedule) -> None:
+    """Apply the harmonic ``schedule`` to the TP through the case's forcing ([vibration]):
+    "face" spreads it over the TP top face, "eccentric" puts it at a point of the top edge,
+    "shaker" at ``shaker_height_m`` above the TP's lower end (both at ``angle_deg``)."""
+    vib = model.case.vibration
+    loading: TPLoading = model.problem.load
+    if vib.forcing == "face":
+        loading.schedule = schedule
+    else:
+        j = model.placed
+        if vib.forcing == "eccentric":
+            point = shaker_point(j.tp, j.tp_offset, j.tp.total_length, vib.angle_deg)
+            point[2] -= 1e-6 * j.tp.total_length  # just inside the top face
+        else:
+            point = shaker_point(j.tp, j.tp_offset, vib.shaker_height_m, vib.angle_deg)
+        loading.shaker = (PointLoad(model.V, point), schedule)
+    model.problem.refresh_load()
