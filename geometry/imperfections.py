@@ -6,7 +6,7 @@ its nominal radius as a function of the angle theta and the part-local height z
 from the +x axis. The map is periodic in angle (linear interpolation) and linear
 in z between stations, held constant beyond the first and last station. Applied
 to a mesh, every node of the part moves radially by dr (the whole wall moves, the
-thickness is kept); see :func:`geometry.mesh.build_joint_model`.
+thickness is kept); see :func:`geometry.mesh.add_joint_to_gmsh`.
 
 Two file formats (CSV with a header line; ``#`` starts a comment line):
 

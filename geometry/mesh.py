@@ -32,8 +32,8 @@ from geometry.parameters import ConePart, JointGeometry, MeshOptions
 __all__ = [
     "MeshOptions",
     "RadialDeviation",
-    "build_joint_model",
-    "build_tube_model",
+    "add_joint_to_gmsh",
+    "add_tube_to_gmsh",
     "create_joint_mesh",
     "create_tube_mesh",
     "write_paraview",
@@ -179,7 +179,7 @@ def _generate(options: MeshOptions) -> None:
         gmsh.model.mesh.setOrder(options.geometry_order)
 
 
-def build_joint_model(
+def add_joint_to_gmsh(
     joint: JointGeometry,
     options: MeshOptions,
     imperfections: Mapping[str, RadialDeviation] | None = None,
@@ -218,7 +218,7 @@ def build_joint_model(
             _apply_deviation(part.volumes, z0, imperfections[name])
 
 
-def build_tube_model(part: ConePart, options: MeshOptions) -> None:
+def add_tube_to_gmsh(part: ConePart, options: MeshOptions) -> None:
     """Populate the current gmsh model with one meshed part, lower end at z = 0."""
     entities = _add_part(part, 0.0, options)
     _close_revolutions()
@@ -302,7 +302,7 @@ def create_joint_mesh(
     :func:`geometry.contact_map.tp_placement` (``joint.tp_offset`` for perfect parts)."""
     tp_z = tp_placement(joint, imperfections)  # on every rank: errors before gmsh starts
     return _to_dolfinx(
-        comm, lambda: build_joint_model(joint, options, imperfections, tp_z), "slipjoint", options
+        comm, lambda: add_joint_to_gmsh(joint, options, imperfections, tp_z), "slipjoint", options
     )
 
 
@@ -310,7 +310,7 @@ def create_tube_mesh(
     comm: MPI.Comm, part: ConePart, options: MeshOptions
 ) -> dolfinx.io.gmsh.MeshData:
     """DOLFINx mesh of one part alone (lower end at z = 0), tags as in :mod:`geometry.tags`."""
-    return _to_dolfinx(comm, lambda: build_tube_model(part, options), "tube", options)
+    return _to_dolfinx(comm, lambda: add_tube_to_gmsh(part, options), "tube", options)
 
 
 def write_paraview(mesh_data: dolfinx.io.gmsh.MeshData, path: str | Path) -> Path:
