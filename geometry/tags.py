@@ -35,3 +35,13 @@ JOINT_NAMES = {
     TP_CONTACT: "tp_contact",
 }
 TUBE_NAMES = {VOLUME: "volume", BOTTOM: "bottom", TOP: "top", OUTER: "outer", INNER: "inner"}
+
+#: the joint's ids by the names that case files use (``[contact] slave``, ``[modal] clamped``)
+BY_NAME = {
+    "MP_VOLUME": MP_VOLUME,
+    "TP_VOLUME": TP_VOLUME,
+    "MP_CLAMPED": MP_CLAMPED,
+    "TP_TOP": TP_TOP,
+    "MP_CONTACT": MP_CONTACT,
+    "TP_CONTACT": TP_CONTACT,
+}

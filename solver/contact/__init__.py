@@ -14,18 +14,20 @@ one mesh and against a rigid plane (docs/contact.md).
 """
 
 from solver.contact.friction import FrictionLaw
-from solver.contact.model import ContactState, Status
+from solver.contact.model import ContactModel, ContactState, PointStates, Status
 from solver.contact.nitsche import NitscheContact
 from solver.contact.pairing import Pairing, pair
 from solver.contact.rigid import RigidPlaneContact
 from solver.contact.surfaces import MasterSurface, SlaveQuadrature
 
 __all__ = [
+    "ContactModel",
     "ContactState",
     "FrictionLaw",
     "MasterSurface",
     "NitscheContact",
     "Pairing",
+    "PointStates",
     "RigidPlaneContact",
     "SlaveQuadrature",
     "Status",

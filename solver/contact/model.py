@@ -6,12 +6,17 @@ mesh, closest-point pairing) and ``solver.contact.rigid.RigidPlaneContact`` (a b
 a rigid plane, UFL). Forces in N, displacements in m, tractions in Pa.
 """
 
+from collections.abc import Mapping
 from dataclasses import dataclass
 from enum import IntEnum
+from typing import Protocol
 
+import dolfinx
+import numpy as np
 import numpy.typing as npt
+from petsc4py import PETSc
 
-__all__ = ["ContactState", "Status"]
+__all__ = ["ContactModel", "ContactState", "PointStates", "Status"]
 
 
 class Status(IntEnum):
@@ -34,3 +39,73 @@ class ContactState:
     coordinates: npt.NDArray  #: deformed slave points x (np, 3) [m]
     weights: npt.NDArray  #: surface quadrature weights (reference configuration) [m^2]
     normal: npt.NDArray  #: n = -n_m, the contact normal pointing out of the slave (np, 3)
+
+
+class PointStates(Protocol):
+    """The per-point state every contact model reports (this rank's contact points)."""
+
+    status: npt.NDArray  #: Status values
+    gap: npt.NDArray  #: normal gap [m]
+    pressure: npt.NDArray  #: contact pressure >= 0 [Pa]
+    tangential_traction: npt.NDArray  #: friction traction on the body (n, gdim) [Pa]
+    slip_velocity: npt.NDArray  #: slip velocity (n, gdim) [m/s]
+
+
+class ContactModel(Protocol):
+    """Everything ``Elastodynamics`` and ``ContactNewtonSolver`` call on a contact object.
+
+    A step: ``set_reference(u_n, dt)``, then at each iterate ``update(u)`` and
+    ``residual()`` / ``jacobian()`` (PETSc objects in the layout of V, owned by the caller).
+    A model without a capability implements it trivially (a rigid plane has no round-off
+    floor estimate, no reversal limit and no memory beyond the step).
+    """
+
+    #: local cells whose dofs the contact residual and Jacobian involve (the zone that
+    #: ``solver.dynamics.condensation`` keeps)
+    support_cells: npt.NDArray[np.int32]
+
+    @property
+    def state(self) -> PointStates:
+        """Status, gap, pressure, friction traction, slip velocity at the last update."""
+        ...
+
+    def set_reference(self, u_old: dolfinx.fem.Function, dt: float | None) -> None:
+        """Start a step from u_old; slip velocities are increments over dt [s] (None: rate-free)."""
+        ...
+
+    def update(self, u: dolfinx.fem.Function) -> None:
+        """Evaluate the contact state at the iterate u."""
+        ...
+
+    def updated_at(self, u: dolfinx.fem.Function) -> bool:
+        """Whether the last ``update`` was at u's present values, on every rank (False: update)."""
+        ...
+
+    def residual(self) -> PETSc.Vec:
+        """Contact residual r_c at the last update [N]."""
+        ...
+
+    def jacobian(self) -> PETSc.Mat:
+        """Generalized derivative d r_c / d u at the last update [N/m]."""
+        ...
+
+    def residual_floor(self) -> float:
+        """Round-off level of ||r_c|| at the last update [N] (0: no estimate), on every rank."""
+        ...
+
+    def slip_directions(self) -> tuple[npt.NDArray, npt.NDArray]:
+        """The slipping points at the last update and their trial tractions [Pa] (this rank)."""
+        ...
+
+    def reversal_limit(self, slipping: npt.NDArray, P_t0: npt.NDArray) -> float:
+        """Largest fraction (<= 1, this rank) of the step from the ``slip_directions`` iterate to
+        the last update before a slipping point's friction reverses (1: no limit)."""
+        ...
+
+    def memory(self) -> dict[str, npt.NDArray]:
+        """This rank's state carried from one step to the next (for checkpoints)."""
+        ...
+
+    def restore_memory(self, memory: Mapping[str, npt.NDArray]) -> None:
+        """Set the state carried between steps (after ``update`` at the restored u)."""
+        ...

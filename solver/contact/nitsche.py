@@ -36,7 +36,7 @@ from common.material import Material
 from solver.contact.assembly import PointMatrices, assemble_point_vector, grouped_products
 from solver.contact.friction import FrictionLaw
 from solver.contact.model import ContactState, Status
-from solver.contact.pairing import pair
+from solver.contact.pairing import Pairing, pair
 from solver.contact.surfaces import MasterSurface, SlaveQuadrature
 
 __all__ = ["NitscheContact"]
@@ -67,7 +67,7 @@ class NitscheContact:
     Jacobian is a separate AIJ matrix with its own sparsity (it couples slave and
     master dofs, which the bulk pattern lacks): add it as ``A.axpy(1, J,
     PETSc.Mat.Structure.DIFFERENT_NONZERO_PATTERN)`` or use ``solver.dynamics.newton``, which
-    keeps A and J apart.
+    keeps A and J apart. Implements ``solver.contact.model.ContactModel``.
     """
 
     def __init__(
@@ -112,6 +112,8 @@ class NitscheContact:
         self._matrices = PointMatrices(V.mesh.comm, self._sizes)  # the Jacobian's COO pattern cached
         u0 = dolfinx.fem.Function(V)
         self.dt: float | None = None
+        self.state: ContactState | None = None  #: the contact state at the last update
+        self.pairing: Pairing | None = None  #: the pairing of the last update
         self.set_reference(u0, None)
         self.update(u0)
 
@@ -125,9 +127,9 @@ class NitscheContact:
         if dt is not None and not dt > 0:
             raise ValueError(f"time step dt must be positive (or None for rate-free steps), got {dt}")
         self.dt = dt
-        previous = getattr(self, "state", None)
         self._speed_old = (
-            np.linalg.norm(previous.slip_velocity, axis=1) if previous is not None else np.zeros(self.slave.num_points)
+            np.linalg.norm(self.state.slip_velocity, axis=1) if self.state is not None
+            else np.zeros(self.slave.num_points)
         )
         self._u_old_slave = self.slave.displacement(u_old)
         self._u_old_master = self.master.displacement(u_old)
@@ -143,7 +145,7 @@ class NitscheContact:
         disp = self.master.displacement(u)
         self._disp = disp
         x = slave.points + u_s
-        if hasattr(self, "pairing"):  # keep facets at kinks, warm-start the projection
+        if self.pairing is not None:  # keep facets at kinks, warm-start the projection
             p = pair(x, self.master, disp, previous=self.pairing.facet, previous_s=self.pairing.s)
         else:
             p = pair(x, self.master, disp)
@@ -221,6 +223,24 @@ class NitscheContact:
         """Whether the last ``update`` since ``set_reference`` was at u's present values (all ranks)."""
         same = self._updated_at is not None and np.array_equal(self._updated_at, u.x.array)
         return self.V.mesh.comm.allreduce(same, op=MPI.LAND)
+
+    def memory(self) -> dict[str, npt.NDArray]:
+        """This rank's contact memory: the slip velocity of the last step [m/s] (the lagged friction
+        coefficient's speed), the paired master facet, which the pairing keeps while it is as close
+        as any other, and the point's coordinates on that facet, from which the next projection
+        starts."""
+        return {
+            "slip_velocity": self.state.slip_velocity,
+            "paired_facet": self.pairing.facet,
+            "paired_coordinates": self.pairing.s,
+        }
+
+    def restore_memory(self, memory) -> None:
+        """Set the contact memory (the arrays of ``memory()``, same shapes) after an ``update`` at the
+        restored u."""
+        self.pairing.facet[:] = memory["paired_facet"]
+        self.pairing.s[:] = memory["paired_coordinates"]
+        self.state.slip_velocity[:] = memory["slip_velocity"]
 
     # -- per-point operators -------------------------------------------------------------
     def _traction(self, idx: npt.NDArray) -> npt.NDArray:

@@ -58,7 +58,11 @@ def _ball_projection(x, radius, eps: float):
 
 
 class RigidPlaneContact:
-    """Frictional Nitsche contact of the facets ``tag`` with a rigid plane."""
+    """Frictional Nitsche contact of the facets ``tag`` with a rigid plane.
+
+    Implements ``solver.contact.model.ContactModel``; its UFL forms read the iterate directly,
+    so it carries no memory between steps, no reversal limit and no round-off estimate.
+    """
 
     def __init__(self, V: fem.FunctionSpace, facet_tags, tag: int, material: Material,
                  friction: FrictionLaw | None, plane_point: npt.ArrayLike, plane_normal: npt.ArrayLike,
@@ -80,6 +84,12 @@ class RigidPlaneContact:
         self.u_old = fem.Function(V, name="contact_reference")
         self.dt = fem.Constant(mesh, 1.0)
         self._tag, self._facet_tags = tag, facet_tags
+        tdim = mesh.topology.dim
+        mesh.topology.create_connectivity(tdim - 1, tdim)
+        f2c = mesh.topology.connectivity(tdim - 1, tdim)
+        facets = facet_tags.find(tag)
+        #: local cells with a contact facet: the only cells whose dofs r_c and J_c involve
+        self.support_cells = np.unique(f2c.array[f2c.offsets[facets]]).astype(np.int32)
 
         x = ufl.SpatialCoordinate(mesh)
         n = ufl.as_vector(-n_o)
@@ -132,16 +142,40 @@ class RigidPlaneContact:
             X = _facet_points_in_cell(cell_type, lf, degree)
             self._state_expressions.append((X, [fem.Expression(e, X, comm=mesh.comm) for e in self._state_fields]))
 
-    def set_reference(self, u_old: fem.Function, dt: float) -> None:
-        """Displacement at the previous step (slip increments are measured from it) and dt [s]."""
-        if not dt > 0:
+    def set_reference(self, u_old: fem.Function, dt: float | None) -> None:
+        """Displacement at the previous step (slip increments are measured from it) and dt [s]
+        (``None``: a rate-free step, slip velocity 0)."""
+        if dt is not None and not dt > 0:
             raise ValueError(f"time step must be positive, got {dt} s")
         self.u_old.x.array[:] = u_old.x.array
-        self.dt.value = dt
+        self.dt.value = np.inf if dt is None else dt
 
     def update(self, u: fem.Function) -> None:
         """Set the current displacement iterate."""
         self.u.x.array[:] = u.x.array
+
+    def updated_at(self, u: fem.Function) -> bool:
+        """Always False: the forms evaluate at the iterate set by ``update`` (which is cheap)."""
+        return False
+
+    def residual_floor(self) -> float:
+        """No round-off estimate: 0."""
+        return 0.0
+
+    def slip_directions(self) -> tuple[npt.NDArray, npt.NDArray]:
+        """No reversal limit: no points."""
+        return np.zeros(0, dtype=bool), np.zeros((0, self.V.mesh.geometry.dim))
+
+    def reversal_limit(self, slipping: npt.NDArray, P_t0: npt.NDArray) -> float:
+        """No reversal limit: 1."""
+        return 1.0
+
+    def memory(self) -> dict[str, npt.NDArray]:
+        """No state carried between steps."""
+        return {}
+
+    def restore_memory(self, memory) -> None:
+        """No state carried between steps."""
 
     def residual(self) -> PETSc.Vec:
         """Contact residual vector r_c(u) [N] (a new vector owned by the caller)."""

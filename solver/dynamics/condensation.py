@@ -48,7 +48,7 @@ class BulkCondensation:
         A: assembled operator (Dirichlet rows/columns as identities) on V.
         V: its function space.
         zone_cells: local cells (owned or ghost) whose dofs the contact residual involves
-            (``NitscheContact.support_cells``).
+            (``ContactModel.support_cells``).
         lu_solver: factorisation package of the bulk.
         chunk: interface columns per multiple-right-hand-side solve when building S (64: 18 s
             against 25 s with 512 and 37 s with all 2592 at once, 48 around, 2 ranks).

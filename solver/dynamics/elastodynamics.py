@@ -11,8 +11,8 @@ generalised-alpha, or quasi-static). Each step solves the effective system
 
 with a reused LU factorisation of A when there is no contact, and with
 ``solver.dynamics.newton.solve_contact_problem`` (generalised Newton, LU of A + J_c reused
-across iterations and steps while dt is unchanged) when there is. The contact object
-is ``solver.contact.nitsche.NitscheContact`` (two bodies) or ``solver.contact.RigidPlaneContact``.
+across iterations and steps while dt is unchanged) when there is. The contact object is a
+``solver.contact.model.ContactModel``: ``NitscheContact`` (two bodies) or ``RigidPlaneContact``.
 Modal damping is low rank and enters b explicitly through the Newmark-predicted
 velocity v_n + (1 - alpha_f) dt a_n (error O(dt^2), see ``solver.dynamics.damping``).
 Dirichlet conditions must be homogeneous (clamped boundaries).
@@ -30,7 +30,7 @@ from dolfinx import fem
 from dolfinx.fem import petsc as fem_petsc
 
 from common.material import Material
-from solver.contact import Status
+from solver.contact.model import ContactModel, Status
 from solver.dynamics.condensation import BulkCondensation
 from solver.dynamics.damping import ModalDamping, RayleighDamping
 from solver.dynamics.newton import ContactNewtonSolver
@@ -82,10 +82,10 @@ class Elastodynamics:
 
     def __init__(self, V: fem.FunctionSpace, M: PETSc.Mat, K: PETSc.Mat, bcs: Sequence[fem.DirichletBC],
                  load: Load | None = None, scheme: Scheme = GeneralisedAlpha(),
-                 damping: RayleighDamping | ModalDamping | None = None, contact=None,
+                 damping: RayleighDamping | ModalDamping | None = None, contact: ContactModel | None = None,
                  newton_options: dict | None = None, condense_bulk: bool = False):
-        if condense_bulk and not hasattr(contact, "support_cells"):
-            raise ValueError("condense_bulk needs a contact object that names its cells (NitscheContact)")
+        if condense_bulk and contact is None:
+            raise ValueError("condense_bulk needs a contact object (the bulk is condensed away from its cells)")
         self.condense_bulk = condense_bulk  #: Newton on the contact zone, the bulk condensed (solver.dynamics.condensation)
         self._condensation: BulkCondensation | None = None
         self.V, self.M, self.K, self.bcs = V, M, K, list(bcs)

@@ -42,7 +42,7 @@ import numpy as np
 
 import dolfinx
 
-from solver.contact import NitscheContact
+from solver.contact.model import ContactModel
 from solver.dynamics.linear_algebra import BlockLU, SumOperator
 
 __all__ = ["ContactNewtonSolver", "NewtonResult", "solve_contact_problem"]
@@ -61,12 +61,6 @@ class NewtonResult:
     timings: dict[str, float] = field(default_factory=dict)  #: wall time per phase [s]
 
 
-def _residual_floor(contact) -> float:
-    """Round-off floor of the contact residual [N] (0 for contact objects without an estimate)."""
-    estimate = getattr(contact, "residual_floor", None)
-    return estimate() if estimate is not None else 0.0
-
-
 class ContactNewtonSolver:
     """Newton solver for A u + r_c(u) = b that keeps an LU factorisation between iterations and calls.
 
@@ -74,7 +68,7 @@ class ContactNewtonSolver:
         A: bulk matrix (with Dirichlet rows/columns), constant while this solver is used.
         bcs: Dirichlet conditions of the problem.
         rtol, atol: convergence when ||F|| <= max(atol, rtol max(||F_0||, ||b||), floor) [N] (floor:
-            the round-off level of the contact residual, ``NitscheContact.residual_floor``; in a
+            the round-off level of the contact residual, ``ContactModel.residual_floor``; in a
             Newmark step A is dominated by M / (beta dt^2), so a residual of rtol ||b|| changes u
             by about rtol relative, and in slow steps the floor usually decides) ...
         stol: ... or when the Newton correction ||du||_inf <= stol ||u||_inf (the residual of a
@@ -102,7 +96,7 @@ class ContactNewtonSolver:
         limit_reversal: with backtracking, when the (gap-limited) Newton step does not lower
             ||F||, first try the step shortened to where the first slipping point's trial
             friction traction would turn against its direction at the iterate
-            (``NitscheContact.reversal_limit``; contact objects without it: no effect), then
+            (``ContactModel.reversal_limit``; a model without a limit returns 1: no effect), then
             halve from there. The slip tangent has no stiffness along the slip direction, so
             where the TP stops the Newton step slides it on until the friction reverses, and
             halving only approaches the stop linearly (docs/contact.md, section 6).
@@ -268,7 +262,7 @@ class ContactNewtonSolver:
             raise RuntimeError(f"linear solve failed (KSP reason {reason})")
         return its
 
-    def _residual(self, b: PETSc.Vec, contact: NitscheContact, u: dolfinx.fem.Function, F: PETSc.Vec, timings: dict,
+    def _residual(self, b: PETSc.Vec, contact: ContactModel, u: dolfinx.fem.Function, F: PETSc.Vec, timings: dict,
                   update: bool = True) -> float:
         """F = A u - b + r_c(u) (contact updated at u unless ``update`` is False, zero on Dirichlet
         rows); returns ||F||."""
@@ -301,8 +295,7 @@ class ContactNewtonSolver:
         to where the first one would. Returns (alpha, ||F||) of the step taken."""
         u.x.petsc_vec.copy(x0)
         gap = contact.state.gap.copy() if self.max_gap_change is not None else None
-        slip = (contact.slip_directions() if self.limit_reversal and self.max_backtracks
-                and hasattr(contact, "slip_directions") else None)
+        slip = contact.slip_directions() if self.limit_reversal and self.max_backtracks else None
         trial = self._trial(b, contact, u, x0, du, 1.0, F, timings)
         alpha = 1.0 if gap is None else self._gap_limited_step(gap, contact.state.gap)
         reversal = 1.0 if slip is None else self._comm.allreduce(contact.reversal_limit(*slip), op=MPI.MIN)
@@ -340,7 +333,7 @@ class ContactNewtonSolver:
         worst = self._comm.allreduce(float(ratio.max()) if ratio.size else 0.0, op=MPI.MAX)
         return 1.0 if worst <= 1.0 else 1.0 / worst
 
-    def solve(self, b: PETSc.Vec, contact: NitscheContact, u: dolfinx.fem.Function,
+    def solve(self, b: PETSc.Vec, contact: ContactModel, u: dolfinx.fem.Function,
               load_norm: float | None = None) -> NewtonResult:
         """Solve A u + r_c(u) = b for u (initial guess: u on entry, Dirichlet values imposed).
 
@@ -362,14 +355,13 @@ class ContactNewtonSolver:
         step_small = False
         eta = self.forcing_max
         # e.g. a time step's predictor, where the caller evaluated the contact status
-        current = getattr(contact, "updated_at", None)
-        norm = self._residual(b, contact, u, F, timings, update=not (current is not None and current(u)))
+        norm = self._residual(b, contact, u, F, timings, update=not contact.updated_at(u))
         for k in range(self.max_iterations + 1):
             norms.append(norm)
             if not np.isfinite(norm):
                 result = NewtonResult(False, k, norms, linear, message=f"residual is not finite at iteration {k}")
                 break
-            tol = max(self.atol, self.rtol * max(norms[0], b_norm), _residual_floor(contact))
+            tol = max(self.atol, self.rtol * max(norms[0], b_norm), contact.residual_floor())
             if norm <= tol or step_small:
                 result = NewtonResult(True, k, norms, linear)
                 break
@@ -416,7 +408,7 @@ class ContactNewtonSolver:
 def solve_contact_problem(
     A: PETSc.Mat,
     b: PETSc.Vec,
-    contact: NitscheContact,
+    contact: ContactModel,
     u: dolfinx.fem.Function,
     bcs: list[dolfinx.fem.DirichletBC],
     solver: ContactNewtonSolver | None = None,

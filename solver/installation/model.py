@@ -105,8 +105,8 @@ def set_up_joint_model(comm: MPI.Comm, case: InstallationCase) -> JointModel:
     contact = NitscheContact(
         V,
         mesh_data.facet_tags,
-        getattr(tags, case.contact.slave),
-        getattr(tags, case.contact.master),
+        tags.BY_NAME[case.contact.slave],
+        tags.BY_NAME[case.contact.master],
         case.material,
         case.friction,
         gamma0=case.contact.gamma0,
@@ -177,8 +177,8 @@ def settled_modes(model: JointModel, n_modes: int) -> tuple[ModalResult, Contact
         contact = NitscheContact(
             model.V,
             model.mesh_data.facet_tags,
-            getattr(tags, c.slave),
-            getattr(tags, c.master),
+            tags.BY_NAME[c.slave],
+            tags.BY_NAME[c.master],
             model.case.material,
             model.case.friction,
             gamma0=c.gamma0,

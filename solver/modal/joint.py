@@ -127,7 +127,7 @@ def joint_modes(
         f"mesh: {mesh_options.n_circumferential} around, {mesh_options.axial_size} m axially, "
         f"degree {case.modal.degree}: {n_dofs} dofs ({t1 - t0:.1f} s)"
     )
-    clamped = [getattr(tags, name) for name in case.modal.clamped]
+    clamped = [tags.BY_NAME[name] for name in case.modal.clamped]
     bcs = [clamp(V, mesh_data.facet_tags, clamped)] if clamped else []
     interface = bonded_band(
         V, mesh_data.facet_tags, case.material, case.modal.band_height, case.modal.gamma0
