@@ -151,7 +151,7 @@ def main(argv=None) -> int:
     histories = {}
     for name, (f, amp) in branches.items():
         checkpoint.restore(branch_dir, problem)
-        problem.rebuild_solver()
+        problem.reset_operator()
         histories[name] = h = harmonic_stage(model, f, amp, a.duration)
         say(f"branch {name:18s} {f:8.2f} Hz {amp:7.0f} N: +{gain(h):.5f} mm, last 20 % "
             f"+{late_gain(h):.5f} mm ({time.perf_counter() - wall:.0f} s)")

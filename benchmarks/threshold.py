@@ -75,7 +75,7 @@ def main(argv=None) -> int:
     rows = []
     for k in a.factors:
         checkpoint.restore(branch_dir, problem)
-        problem.rebuild_solver()
+        problem.reset_operator()
         h = harmonic_stage(model, f_c, k * a.amplitude, a.duration)
         row = {"factor": k, "amplitude_N": k * a.amplitude, "gained_mm": gain(h),
                "gained_second_half_mm": late_gain(h, 0.5),

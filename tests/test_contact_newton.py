@@ -124,7 +124,8 @@ def test_jacobian_at_the_step_start_ignores_round_off(sliding_state):
     noisy.x.scatter_forward()
     contact.update(noisy)
     perturbed = contact.jacobian()
-    ds_max = MPI.COMM_WORLD.allreduce(float(np.abs(contact._ds).max(initial=0.0)), op=MPI.MAX)
+    # dt = 1 s: the slip velocity [m/s] is the slip increment ds [m]
+    ds_max = MPI.COMM_WORLD.allreduce(float(np.abs(contact.state.slip_velocity).max(initial=0.0)), op=MPI.MAX)
     assert 0.0 < ds_max < 1e-17  # ds is round-off (both times; 0 or 1e-19 m without the noise)
     perturbed.axpy(-1.0, exact, structure=PETSc.Mat.Structure.DIFFERENT_NONZERO_PATTERN)
     assert perturbed.norm() < 1e-9 * exact.norm()

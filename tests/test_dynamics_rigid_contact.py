@@ -202,10 +202,10 @@ def test_friction_oscillator_matches_den_hartog():
 def test_newton_starts_from_u_n_where_stick_and_slip_change(monkeypatch):
     """Each step's Newton solve starts from the predictor unless some point's status there
     changes between stick and slip against the last step's; then from u_n
-    (``Elastodynamics._initial_guesses``). In the friction oscillator with a stop (friction
+    (``Elastodynamics.initial_guesses``). In the friction oscillator with a stop (friction
     0.6 F0, started at rest) that happens only around the stop. The start must not change the
     solution: the history equals that of predictor-first starts to the Newton tolerance."""
-    original = Elastodynamics._initial_guesses
+    original = Elastodynamics.initial_guesses
     starts = []
 
     def spy(self, u_old, dt):
@@ -213,7 +213,7 @@ def test_newton_starts_from_u_n_where_stick_and_slip_change(monkeypatch):
         starts.append((self.t + dt, guesses[0] is u_old))
         return guesses
 
-    monkeypatch.setattr(Elastodynamics, "_initial_guesses", spy)
+    monkeypatch.setattr(Elastodynamics, "initial_guesses", spy)
     chosen = friction_oscillator(periods=2.0, friction_force=STOPS, backtracks=4)
     t_u_n = np.array([t for t, first in starts if first])
     sticking = chosen["time_s"][chosen["slipping"] == 0]
@@ -229,7 +229,7 @@ def test_newton_starts_from_u_n_where_stick_and_slip_change(monkeypatch):
     def predictor_first(self, u_old, dt):
         return u_old + dt * self.v.x.array + 0.5 * dt**2 * self.a.x.array, u_old
 
-    monkeypatch.setattr(Elastodynamics, "_initial_guesses", predictor_first)
+    monkeypatch.setattr(Elastodynamics, "initial_guesses", predictor_first)
     reference = friction_oscillator(periods=2.0, friction_force=STOPS, backtracks=4)
     assert np.array_equal(chosen["time_s"], reference["time_s"])
     assert np.max(np.abs(chosen["x_m"] - reference["x_m"])) < 1e-7 * np.max(np.abs(reference["x_m"]))

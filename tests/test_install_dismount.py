@@ -103,7 +103,7 @@ def _branch(settled, static_axial) -> None:
     model.problem.load.static_axial = static_axial
     model.problem.load.shaker = None
     checkpoint.restore(settled["checkpoint"], model.problem)
-    model.problem.rebuild_solver()
+    model.problem.reset_operator()
 
 
 def _vibrate(model, stage: Stage, f_max: float, chunks: int = 1, stop=None) -> np.ndarray:
@@ -197,7 +197,7 @@ def sweep(settled):
                                 amplitude)[0], SWEEP_SPAN[1] * f_r),
     ):
         checkpoint.restore(folder, model.problem)
-        model.problem.rebuild_solver()
+        model.problem.reset_operator()
         gains[name] = _vibrate(model, stage, f_max)[-1, 1] - pre[-1, 1]
     print(f"\nsweep: static preload to {-peak / 1e3:.1f} kN settled {gains['preload']:+.4f} mm; "
           f"then {SWEEP_DURATION_S} s at {amplitude:.0f} N: dwell at {f_r:.2f} Hz "

@@ -158,7 +158,7 @@ def run_scenario(folder: str, overrides: list[str], names: str) -> Scenario:
     branches = {}
     for name in names:
         checkpoint.restore(folder, model.problem)
-        model.problem.rebuild_solver()
+        model.problem.reset_operator()
         slip[name] = InterfaceSlip(model.contact)
         branches[name] = harmonic_stage(model, *stages[name], BRANCH, [slip[name]])
     if comm.rank == 0:

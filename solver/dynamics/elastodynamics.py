@@ -78,7 +78,14 @@ def _lu_solver(comm: MPI.Comm, A: PETSc.Mat, prefix: str) -> PETSc.KSP:
 
 
 class Elastodynamics:
-    """State (u, v, a) at time t and the step u_n -> u_{n+1} of a Newmark-family scheme."""
+    """State (u, v, a) at time t and the step u_n -> u_{n+1} of a Newmark-family scheme.
+
+    Besides ``step``: ``state_arrays()`` / ``restore_state(t, arrays)`` save and restore
+    everything a step depends on (checkpoints), ``refresh_load()`` re-evaluates f(t) after
+    the load object changed, ``set_scheme(scheme)`` switches the time scheme and
+    ``reset_operator()`` drops the factorisation (the next step rebuilds it). ``last_result``
+    is the outcome of the last step attempted.
+    """
 
     def __init__(self, V: fem.FunctionSpace, M: PETSc.Mat, K: PETSc.Mat, bcs: Sequence[fem.DirichletBC],
                  load: Load | None = None, scheme: Scheme = GeneralisedAlpha(),
@@ -100,6 +107,7 @@ class Elastodynamics:
         self._b, self._work, self._b_hat = K.createVecLeft(), K.createVecLeft(), K.createVecLeft()
         self._r_contact_old = K.createVecLeft()  # r_c(u_n), used when alpha_f > 0
         self.contact_status: np.ndarray | None = None  #: contact status at the end of the last step (this rank's points)
+        self.last_result: StepResult | None = None  #: outcome of the last step attempted
         self.A = K.duplicate(copy=True)
         self._dt_of_A = None
         self._ksp = _lu_solver(V.mesh.comm, self.A, "dynamics_")
@@ -216,7 +224,7 @@ class Elastodynamics:
         b.scale(1.0 / (1.0 - af))
         b.array_w[self._bc_dofs] = 0.0
 
-    def _initial_guesses(self, u_old: np.ndarray, dt: float) -> tuple[np.ndarray, np.ndarray]:
+    def initial_guesses(self, u_old: np.ndarray, dt: float) -> tuple[np.ndarray, np.ndarray]:
         """The two starts of a contact step's Newton solve, in order: the predictor and u_n.
 
         The predictor (constant acceleration; constant velocity when quasi-static) extrapolates
@@ -253,7 +261,7 @@ class Elastodynamics:
             result = StepResult(converged=self._ksp.getConvergedReason() > 0)
         else:
             self.contact.set_reference(self.u, dt)
-            starts = self._initial_guesses(u_old, dt)
+            starts = self.initial_guesses(u_old, dt)
             A, b, condensation = self.A, self._b, self._condensation
             if condensation is not None:
                 A, b = condensation.A_hat, self._b_hat
@@ -270,6 +278,7 @@ class Elastodynamics:
             if res.converged and condensation is not None:
                 condensation.recover(self._b, self.u)
             result = StepResult(res.converged, iterations, res.residual_norms, res.message)
+        self.last_result = result
         if not result.converged:
             self.u.x.array[:] = u_old
             return result
@@ -285,6 +294,46 @@ class Elastodynamics:
         self._f_new.copy(self._f_old)
         self.t += dt
         return result
+
+    def refresh_load(self) -> None:
+        """Re-evaluate the load f(t) at the current time (after the load object was changed)."""
+        self._evaluate_load(self.t, self._f_old)
+
+    def reset_operator(self) -> None:
+        """Drop the factorisation and the Newton workspace: the next step starts afresh."""
+        self._dt_of_A = None
+
+    def set_scheme(self, scheme: Scheme) -> None:
+        """Integrate the following steps with ``scheme`` (the operator is rebuilt)."""
+        self.scheme = scheme
+        self.reset_operator()
+
+    def state_arrays(self) -> dict[str, np.ndarray]:
+        """This rank's local arrays (owned and ghost entries) of everything the next step depends
+        on besides t: u, v, a [m, m/s, m/s^2], the contact residual at u_n (generalised-alpha) [N],
+        the contact model's memory and, after a contact step, the points' status (which chooses
+        the next step's Newton start). Views, not copies."""
+        arrays = {"u": self.u.x.array, "v": self.v.x.array, "a": self.a.x.array,
+                  "r_contact_old": self._r_contact_old.array_r}
+        if self.contact is not None:
+            arrays.update(self.contact.memory())
+            if self.contact_status is not None:
+                arrays["contact_status"] = self.contact_status
+        return arrays
+
+    def restore_state(self, t: float, arrays) -> None:
+        """Set the state at time t [s] from ``state_arrays()``'s arrays (same shapes; without
+        ``contact_status`` the next step starts from the predictor)."""
+        for key, f in (("u", self.u), ("v", self.v), ("a", self.a)):
+            f.x.array[:] = arrays[key]
+        self.t = float(t)
+        self._evaluate_load(self.t, self._f_old)
+        self._r_contact_old.array_w[:] = arrays["r_contact_old"]
+        if self.contact is not None:
+            self.contact.set_reference(self.u, None)
+            self.contact.update(self.u)
+            self.contact.restore_memory(arrays)
+            self.contact_status = arrays["contact_status"].copy() if "contact_status" in arrays else None
 
     def energy(self) -> tuple[float, float]:
         """(kinetic 1/2 v.Mv, strain 1/2 u.Ku) [J]."""

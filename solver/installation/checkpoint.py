@@ -2,8 +2,8 @@
 
 A checkpoint is a folder with
 
-* ``rank<r>.npz`` on every rank: the rank's local arrays (owned and ghost entries) of
-  u, v, a [m, m/s, m/s^2], the contact residual at u_n (needed by generalised-alpha)
+* ``rank<r>.npz`` on every rank: ``Elastodynamics.state_arrays()``, the rank's local arrays
+  (owned and ghost entries) of u, v, a [m, m/s, m/s^2], the contact residual at u_n (needed by generalised-alpha)
   [N], and the contact memory of the slave points on this rank (slip velocity of
   the last step [m/s], the paired master facet, which the pairing keeps while it
   is as close as any other, the point's coordinates on that facet, from which the
@@ -26,6 +26,8 @@ from typing import Any
 import numpy as np
 from mpi4py import MPI
 
+from solver.dynamics.elastodynamics import Elastodynamics
+
 MANIFEST = "manifest.json"
 
 
@@ -40,8 +42,8 @@ def _rank_file(folder: Path, rank: int) -> Path:
     return folder / f"rank{rank}.npz"
 
 
-def save(folder: str | Path, problem, record: dict[str, Any]) -> None:
-    """Write the state of ``problem`` (``solver.dynamics.elastodynamics.Elastodynamics``) and ``record``."""
+def save(folder: str | Path, problem: Elastodynamics, record: dict[str, Any]) -> None:
+    """Write the state of ``problem`` (``Elastodynamics.state_arrays``) and ``record``."""
     comm: MPI.Comm = problem.V.mesh.comm
     folder = Path(folder)
     tmp = folder.with_name(folder.name + ".tmp")
@@ -49,20 +51,7 @@ def save(folder: str | Path, problem, record: dict[str, Any]) -> None:
         shutil.rmtree(tmp, ignore_errors=True)
         tmp.mkdir(parents=True)
     comm.barrier()
-    arrays = {
-        "u": problem.u.x.array,
-        "v": problem.v.x.array,
-        "a": problem.a.x.array,
-        "r_contact_old": problem._r_contact_old.array_r,
-    }
-    contact = problem.contact
-    if contact is not None:
-        arrays["slip_velocity"] = contact.state.slip_velocity
-        arrays["paired_facet"] = contact.pairing.facet
-        arrays["paired_coordinates"] = contact.pairing.s
-        if problem.contact_status is not None:
-            arrays["contact_status"] = problem.contact_status
-    np.savez(_rank_file(tmp, comm.rank), **arrays)
+    np.savez(_rank_file(tmp, comm.rank), **problem.state_arrays())
     if comm.rank == 0:
         manifest = {"ranks": comm.size, "time_s": problem.t, **record}
         (tmp / MANIFEST).write_text(json.dumps(manifest, indent=1, default=_plain))
@@ -96,42 +85,25 @@ def read_manifest(folder: str | Path, comm: MPI.Comm) -> dict[str, Any]:
     return manifest
 
 
-def restore(folder: str | Path, problem) -> dict[str, Any]:
+def restore(folder: str | Path, problem: Elastodynamics) -> dict[str, Any]:
     """Load the state into ``problem`` (built exactly as when saving) and return the manifest."""
     comm: MPI.Comm = problem.V.mesh.comm
     manifest = read_manifest(folder, comm)
     data = np.load(_rank_file(Path(folder), comm.rank))
-    required = ["u", "v", "a", "r_contact_old"]
-    if problem.contact is not None:
-        required += ["slip_velocity", "paired_facet", "paired_coordinates"]
+    expected = problem.state_arrays()
+    required = [key for key in expected if key != "contact_status"]
     missing = [key for key in required if key not in data.files]
     if comm.allreduce(bool(missing), op=MPI.LOR):
         raise ValueError(
             f"checkpoint {folder} lacks {', '.join(missing) or 'arrays on another rank'} (written by "
             "an older version of the code?): rerun without --resume"
         )
-    ok = all(
-        data[k].shape == f.x.array.shape
-        for k, f in (("u", problem.u), ("v", problem.v), ("a", problem.a))
-    )
-    if problem.contact is not None:  # the same slave points (contact surfaces)
-        ok = ok and data["paired_facet"].shape == problem.contact.pairing.facet.shape
+    arrays = {key: data[key] for key in data.files}
+    ok = all(arrays[key].shape == expected[key].shape for key in required)
     if comm.allreduce(not ok, op=MPI.LOR):
         raise ValueError(
             f"checkpoint {folder} does not match this discretisation "
             "(different mesh, contact surfaces or degree than when it was written)"
         )
-    for key, f in (("u", problem.u), ("v", problem.v), ("a", problem.a)):
-        f.x.array[:] = data[key]
-    problem.t = float(manifest["time_s"])
-    problem._evaluate_load(problem.t, problem._f_old)
-    problem._r_contact_old.array_w[:] = data["r_contact_old"]
-    contact = problem.contact
-    if contact is not None:
-        contact.set_reference(problem.u, None)
-        contact.update(problem.u)
-        contact.pairing.facet[:] = data["paired_facet"]
-        contact.pairing.s[:] = data["paired_coordinates"]
-        contact.state.slip_velocity[:] = data["slip_velocity"]
-        problem.contact_status = data["contact_status"].copy() if "contact_status" in data.files else None
+    problem.restore_state(float(manifest["time_s"]), arrays)
     return manifest

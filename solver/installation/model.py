@@ -20,7 +20,7 @@ from geometry.contact_map import tp_placement
 from geometry.mesh import create_joint_mesh
 from solver.contact import NitscheContact, Status
 from solver.dynamics.damping import ModalDamping, RayleighDamping
-from solver.dynamics.elastodynamics import Elastodynamics, StepResult, assemble_structure
+from solver.dynamics.elastodynamics import Elastodynamics, assemble_structure
 from solver.dynamics.loads import PointLoad, Schedule, TopFaceLoad, TPLoading, shaker_point
 from solver.dynamics.schemes import scheme_from_name
 from solver.installation.case import InstallationCase
@@ -40,24 +40,6 @@ class PlacedJoint:
     tp_offset: float
 
 
-class InstallationProblem(Elastodynamics):
-    """Elastodynamics that remembers the last step's result (Newton iterations for the history)."""
-
-    last_result: StepResult | None = None
-
-    def step(self, dt: float) -> StepResult:
-        self.last_result = super().step(dt)
-        return self.last_result
-
-    def refresh_load(self) -> None:
-        """Re-evaluate the load at the current time (after the load callable was changed)."""
-        self._evaluate_load(self.t, self._f_old)
-
-    def rebuild_solver(self) -> None:
-        """Drop the factorisation and Newton workspace: the next step starts afresh."""
-        self._dt_of_A = None
-
-
 @dataclass
 class JointModel:
     """Mesh, space, clamp, matrices, contact, loads and the time-stepping problem of a case."""
@@ -69,7 +51,7 @@ class JointModel:
     contact: NitscheContact
     top: TopFaceLoad
     static: Callable[[float], float]  #: static axial force [N] against time [s]
-    problem: InstallationProblem
+    problem: Elastodynamics
     settlement: Settlement
     damping: RayleighDamping | ModalDamping
     placed: PlacedJoint
@@ -128,7 +110,7 @@ def set_up_joint_model(comm: MPI.Comm, case: InstallationCase) -> JointModel:
     sw = case.self_weight
     static = case.static_force.history(sw)
     top = TopFaceLoad(V, mesh_data.facet_tags, tags.TP_TOP)
-    problem = InstallationProblem(
+    problem = Elastodynamics(
         V,
         M,
         K,

@@ -37,13 +37,14 @@ import numpy as np
 from mpi4py import MPI
 
 from solver.contact import Status
+from solver.dynamics.elastodynamics import Elastodynamics
 from solver.dynamics.loads import Schedule, TPLoading
 from solver.dynamics.schemes import scheme_from_name
 from solver.dynamics.time_loop import run
 from solver.installation import checkpoint
 from solver.installation.case import InstallationCase
 from solver.installation.frequencies import Excitation, choose_frequencies, schedule_excitations
-from solver.installation.model import InstallationProblem, JointModel, attach_vibration, set_up_joint_model, settled_modes
+from solver.installation.model import JointModel, attach_vibration, set_up_joint_model, settled_modes
 from solver.installation.observers import ContactZoneGuard
 from solver.modal.outputs import write_csv, write_outputs
 from solver.modal.ranking import JointParts, ModeRecord, describe_modes
@@ -135,7 +136,7 @@ class Installation:
 
     def _checkpoint(self, next_stage: int, chunk: int) -> None:
         # a resumed run starts with a fresh factorisation, so does the uninterrupted one
-        self.model.problem.rebuild_solver()
+        self.model.problem.reset_operator()
         checkpoint.save(self.checkpoint_dir, self.model.problem, self._record(next_stage, chunk))
         self._checkpoints += 1
         if self._stop_after is not None and self._checkpoints >= self._stop_after:
@@ -146,7 +147,7 @@ class Installation:
         model = self.model
         loading: TPLoading = model.problem.load
 
-        def observe(problem: InstallationProblem) -> dict[str, float]:
+        def observe(problem: Elastodynamics) -> dict[str, float]:
             t = problem.t
             prev_t = self.history[-1]["time_s"] if self.history else 0.0
             schedule = loading.schedule or (loading.shaker[1] if loading.shaker else None)
@@ -370,8 +371,7 @@ class Installation:
                 if (
                     sw.scheme or case.time.scheme
                 ) != case.time.scheme:  # vibration stages: the [time] scheme
-                    model.problem.scheme = scheme_from_name(case.time.scheme, case.time.rho_inf)
-                    model.problem.rebuild_solver()
+                    model.problem.set_scheme(scheme_from_name(case.time.scheme, case.time.rho_inf))
                 bar = self._bar(self.plans[-1].end_s - model.problem.t)
                 for index in range(next_stage, len(self.plans)):
                     self._run_stage(index, next_chunk if index == next_stage else 0, writer, bar)
