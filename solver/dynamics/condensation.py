@@ -27,6 +27,8 @@ from petsc4py import PETSc
 
 import dolfinx
 
+from solver.dynamics.linear_algebra import direct_solver
+
 __all__ = ["BulkCondensation"]
 
 
@@ -81,14 +83,7 @@ class BulkCondensation:
         self.A_IB = A.createSubMatrix(is_I, is_B)
         for index_set in (is_B, is_I):
             index_set.destroy()
-        self._ksp = PETSc.KSP().create(comm)
-        self._ksp.setOptionsPrefix("condensation_")
-        self._ksp.setType("preonly")
-        pc = self._ksp.getPC()
-        pc.setType("lu")
-        pc.setFactorSolverType(lu_solver)
-        self._ksp.setFromOptions()
-        self._ksp.setOperators(self.A_BB)
+        self._ksp = direct_solver(comm, self.A_BB, lu_solver, prefix="condensation_")
         self._ksp.setUp()
         self._xB, self._yB = self.A_BB.createVecs()
         self._xI = self.A_IB.createVecLeft()

@@ -33,6 +33,7 @@ from common.material import Material
 from solver.contact.model import ContactModel, Status
 from solver.dynamics.condensation import BulkCondensation
 from solver.dynamics.damping import ModalDamping, RayleighDamping
+from solver.dynamics.linear_algebra import direct_solver
 from solver.dynamics.newton import ContactNewtonSolver
 from solver.dynamics.schemes import GeneralisedAlpha, Scheme
 from solver.elasticity import epsilon, sigma
@@ -63,18 +64,6 @@ class StepResult:
     iterations: int = 0  #: Newton iterations (0 for a linear step)
     residual_norms: list[float] = field(default_factory=list)
     message: str = ""
-
-
-def _lu_solver(comm: MPI.Comm, A: PETSc.Mat, prefix: str) -> PETSc.KSP:
-    ksp = PETSc.KSP().create(comm)
-    ksp.setOptionsPrefix(prefix)
-    ksp.setType("preonly")
-    pc = ksp.getPC()
-    pc.setType("lu")
-    pc.setFactorSolverType("mumps")
-    ksp.setFromOptions()
-    ksp.setOperators(A)
-    return ksp
 
 
 class Elastodynamics:
@@ -110,7 +99,7 @@ class Elastodynamics:
         self.last_result: StepResult | None = None  #: outcome of the last step attempted
         self.A = K.duplicate(copy=True)
         self._dt_of_A = None
-        self._ksp = _lu_solver(V.mesh.comm, self.A, "dynamics_")
+        self._ksp = direct_solver(V.mesh.comm, self.A, prefix="dynamics_")
         self._evaluate_load(0.0, self._f_old)
 
     def _homogeneous_bc_dofs(self) -> np.ndarray:
@@ -168,7 +157,7 @@ class Elastodynamics:
             r.destroy()
             rhs.axpy(-1.0, self._r_contact_old)
         rhs.array_w[self._bc_dofs] = 0.0
-        ksp = _lu_solver(self.V.mesh.comm, self.M, "dynamics_mass_")
+        ksp = direct_solver(self.V.mesh.comm, self.M, prefix="dynamics_mass_")
         ksp.solve(rhs, self.a.x.petsc_vec)
         ksp.destroy()
         self.a.x.scatter_forward()

@@ -6,7 +6,26 @@ contexts).
 import numpy as np
 from petsc4py import PETSc
 
-__all__ = ["BlockLU", "SumOperator"]
+__all__ = ["BlockLU", "SumOperator", "direct_solver"]
+
+
+def direct_solver(comm, A: PETSc.Mat | None = None, package: str = "mumps", prefix: str | None = None) -> PETSc.KSP:
+    """A direct solver: a KSP that applies the LU factors of its operator (``A``, or set later),
+    computed by the PETSc package ``package`` ("mumps", "superlu_dist", "petsc"). With
+    ``prefix`` the user's PETSc options under that prefix apply (e.g.
+    ``-dynamics_pc_factor_mat_solver_type``); without, none do."""
+    ksp = PETSc.KSP().create(comm)
+    if prefix is not None:
+        ksp.setOptionsPrefix(prefix)
+    ksp.setType(PETSc.KSP.Type.PREONLY)
+    pc = ksp.getPC()
+    pc.setType(PETSc.PC.Type.LU)
+    pc.setFactorSolverType(package)
+    if prefix is not None:
+        ksp.setFromOptions()
+    if A is not None:
+        ksp.setOperators(A)
+    return ksp
 
 
 class BlockLU:

@@ -43,7 +43,7 @@ import numpy as np
 import dolfinx
 
 from solver.contact.model import ContactModel
-from solver.dynamics.linear_algebra import BlockLU, SumOperator
+from solver.dynamics.linear_algebra import BlockLU, SumOperator, direct_solver
 
 __all__ = ["ContactNewtonSolver", "NewtonResult", "solve_contact_problem"]
 
@@ -164,10 +164,7 @@ class ContactNewtonSolver:
         self.ksp.setInitialGuessNonzero(False)
         self.zone = zone
         self._A_factored = A if zone is None else A.createSubMatrix(zone, zone)
-        self._lu = PETSc.KSP().create(comm)
-        self._lu.setType(PETSc.KSP.Type.PREONLY)
-        self._lu.getPC().setType(PETSc.PC.Type.LU)
-        self._lu.getPC().setFactorSolverType(lu_solver)
+        self._lu = direct_solver(comm, package=lu_solver)
         pc = self.ksp.getPC()
         pc.setType(PETSc.PC.Type.PYTHON)
         self._preconditioner = BlockLU(self._lu, None if zone is None else zone.getIndices() - A.getOwnershipRange()[0])
