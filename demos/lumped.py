@@ -12,7 +12,6 @@ The map's runs are shared out over the MPI ranks.
 from __future__ import annotations
 
 import argparse
-import csv
 import dataclasses
 import math
 import sys
@@ -29,6 +28,7 @@ import numpy as np  # noqa: E402
 from geometry.parameters import JointGeometry, load_geometry  # noqa: E402
 from solver.contact import FrictionLaw  # noqa: E402
 from solver.reduced.lumped import GRAVITY, AxialLoad, LumpedModel, simulate  # noqa: E402
+from solver.post.csv import write_csv  # noqa: E402
 from solver.reduced.shell import JointStiffness, joint_stiffness  # noqa: E402
 
 #: SPEC 7 sensitivity cases: (alpha [deg], beta [deg], mu_d)
@@ -118,13 +118,6 @@ def build_model(
     )
 
 
-def write_csv(path: Path, header: list[str], rows) -> None:
-    with path.open("w", newline="") as f:
-        w = csv.writer(f)
-        w.writerow(header)
-        w.writerows(rows)
-
-
 def main(argv: list[str] | None = None) -> int:
     args = parse_args(argv)
     comm = MPI.COMM_WORLD
@@ -176,6 +169,7 @@ def main(argv: list[str] | None = None) -> int:
                 "m_T_kg",
             ],
             rows,
+            digits=None,
         )
         freqs = ", ".join(f"{f:.1f}" for f in base_model.stick_frequencies())
         print(f"  full-scale joint in stick: natural frequencies {freqs} Hz")
@@ -209,6 +203,7 @@ def main(argv: list[str] | None = None) -> int:
             out / "self_weight.csv",
             ["alpha_deg", "beta_deg", "mu_s", "mu_d", "settlement_mm", "L_slip_mm", "reached"],
             rows,
+            digits=None,
         )
         histories = {"self-weight": trajs[0], "10 cm drop": trajs[len(SENSITIVITY_CASES)]}
         print(
@@ -221,6 +216,7 @@ def main(argv: list[str] | None = None) -> int:
                 out / f"history_{name.replace(' ', '_')}.csv",
                 ["time_s", "settlement_mm", "edge_radial_mm", "mode"],
                 zip(traj.t, 1e3 * traj.q[0], 1e3 * traj.q[1], traj.mode),
+                digits=None,
             )
 
     # --- settlement map: runs shared over ranks --------------------------------------
@@ -255,6 +251,7 @@ def main(argv: list[str] | None = None) -> int:
                 "end_time_s",
             ],
             rows,
+            digits=None,
         )
         l_slip = joint.required_slip
         reached = settlement >= l_slip
