@@ -16,31 +16,28 @@ ramped over T seconds on the TP top, generalised-alpha (``--rho-inf``, default 0
 """
 
 import argparse
-import pathlib
 import sys
 import time
 
-sys.path.insert(0, str(pathlib.Path(__file__).resolve().parent.parent))
+from common import backend  # noqa: F401
 
-from common import backend  # noqa: E402,F401
+import numpy as np
+import ufl
+from mpi4py import MPI
+from petsc4py import PETSc
 
-import numpy as np  # noqa: E402
-import ufl  # noqa: E402
-from mpi4py import MPI  # noqa: E402
-from petsc4py import PETSc  # noqa: E402
+import dolfinx
+import dolfinx.fem.petsc
 
-import dolfinx  # noqa: E402
-import dolfinx.fem.petsc  # noqa: E402
-
-from geometry import tags  # noqa: E402
-from geometry.mesh import create_joint_mesh  # noqa: E402
-from geometry.parameters import MeshOptions, geometry_from_case  # noqa: E402
-from common.case import read_case  # noqa: E402
-from solver.contact import NitscheContact  # noqa: E402
-from solver.elasticity import epsilon, sigma  # noqa: E402
-from solver.contact import FrictionLaw  # noqa: E402
-from solver.modal.interface import band_status  # noqa: E402
-from solver.dynamics.newton import ContactNewtonSolver  # noqa: E402
+from geometry import tags
+from geometry.mesh import create_joint_mesh
+from geometry.parameters import MeshOptions, geometry_from_case
+from common.case import read_case
+from solver.contact import NitscheContact
+from solver.elasticity import epsilon, sigma
+from solver.contact import FrictionLaw
+from solver.modal.interface import band_status
+from solver.dynamics.newton import ContactNewtonSolver
 
 
 def timed(comm, f):

@@ -30,32 +30,30 @@ import pathlib
 import sys
 import time
 
-sys.path.insert(0, str(pathlib.Path(__file__).resolve().parent.parent))
+from common import backend  # noqa: F401
 
-from common import backend  # noqa: E402,F401
+import numpy as np
+from mpi4py import MPI
 
-import numpy as np  # noqa: E402
-from mpi4py import MPI  # noqa: E402
+from dolfinx import fem
 
-from dolfinx import fem  # noqa: E402
+from geometry import tags
+from geometry.mesh import create_joint_mesh
+from geometry.parameters import MeshOptions, load_geometry
+from solver.installation import checkpoint
+from common.case import resolve_case_path
+from solver.contact import NitscheContact
+from solver.dynamics.damping import RayleighDamping
+from solver.installation.observers import ContactZoneGuard, Settlement
+from solver.dynamics.elastodynamics import assemble_structure, Elastodynamics
+from solver.dynamics.time_loop import run
+from solver.contact import FrictionLaw
+from solver.dynamics.loads import RampedAxialForce, Schedule, Stage, TopFaceLoad, TPLoading
+from solver.modal.eigen import clamp
+from solver.dynamics.schemes import GeneralisedAlpha
+from solver.post.csv import CsvWriter
 
-from geometry import tags  # noqa: E402
-from geometry.mesh import create_joint_mesh  # noqa: E402
-from geometry.parameters import MeshOptions, load_geometry  # noqa: E402
-from solver.installation import checkpoint  # noqa: E402
-from common.case import resolve_case_path  # noqa: E402
-from solver.contact import NitscheContact  # noqa: E402
-from solver.dynamics.damping import RayleighDamping  # noqa: E402
-from solver.installation.observers import ContactZoneGuard, Settlement  # noqa: E402
-from solver.dynamics.elastodynamics import assemble_structure, Elastodynamics  # noqa: E402
-from solver.dynamics.time_loop import run  # noqa: E402
-from solver.contact import FrictionLaw  # noqa: E402
-from solver.dynamics.loads import RampedAxialForce, Schedule, Stage, TopFaceLoad, TPLoading  # noqa: E402
-from solver.modal.eigen import clamp  # noqa: E402
-from solver.dynamics.schemes import GeneralisedAlpha  # noqa: E402
-from solver.post.csv import CsvWriter  # noqa: E402
-
-from phase_timer import PhaseTimer  # noqa: E402
+from benchmarks.phase_timer import PhaseTimer
 
 
 class StepLog:

@@ -11,22 +11,19 @@ value (solver/reduced/cylinder_shell.py, 14 Legendre terms). Prints a markdown t
 
 import sys
 import time
-from pathlib import Path
 
-sys.path.insert(0, str(Path(__file__).resolve().parent.parent))  # run from a checkout
+from common import backend  # noqa: F401  (before dolfinx)
 
-from common import backend  # noqa: E402,F401  (before dolfinx)
+from dolfinx import fem
+from mpi4py import MPI
 
-from dolfinx import fem  # noqa: E402
-from mpi4py import MPI  # noqa: E402
-
-from geometry import tags  # noqa: E402
-from geometry.mesh import create_tube_mesh  # noqa: E402
-from geometry.parameters import ConePart, MeshOptions  # noqa: E402
-from solver.reduced.cylinder_shell import cylinder_frequencies  # noqa: E402
-from common.material import Material  # noqa: E402
-from solver.modal.eigen import EigenOptions, clamp, modal_analysis  # noqa: E402
-from solver.modal.classify import classify  # noqa: E402
+from geometry import tags
+from geometry.mesh import create_tube_mesh
+from geometry.parameters import ConePart, MeshOptions
+from solver.reduced.cylinder_shell import cylinder_frequencies
+from common.material import Material
+from solver.modal.eigen import EigenOptions, clamp, modal_analysis
+from solver.modal.classify import classify
 
 R, H, L = 0.297, 0.006, 1.4
 STEEL = Material(E=210e9, nu=0.3, rho=7850.0)

@@ -17,19 +17,16 @@ import argparse
 import resource
 import sys
 import time
-from pathlib import Path
 
-sys.path.insert(0, str(Path(__file__).resolve().parent.parent))  # run from a checkout
+from common import backend  # noqa: F401  (before dolfinx)
 
-from common import backend  # noqa: E402,F401  (before dolfinx)
+import numpy as np
+from mpi4py import MPI
 
-import numpy as np  # noqa: E402
-from mpi4py import MPI  # noqa: E402
-
-from common.case import read_case  # noqa: E402
-from solver.modal.joint import JointCase, joint_modes  # noqa: E402
-from solver.modal.classify import classify  # noqa: E402
-from geometry import tags  # noqa: E402
+from common.case import read_case
+from solver.modal.joint import JointCase, joint_modes
+from solver.modal.classify import classify
+from geometry import tags
 
 REFINEMENTS = [  # (label, overrides) -- the first one is the default discretisation
     ("24 around, 0.08 m, p=3 (default)", []),

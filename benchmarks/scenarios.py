@@ -34,23 +34,21 @@ import time
 from collections.abc import Sequence
 from dataclasses import dataclass
 
-sys.path.insert(0, str(pathlib.Path(__file__).resolve().parent.parent))
+from common import backend  # noqa: F401
 
-from common import backend  # noqa: E402,F401
+import numpy as np
+from mpi4py import MPI
 
-import numpy as np  # noqa: E402
-from mpi4py import MPI  # noqa: E402
-
-from solver.installation import checkpoint  # noqa: E402
-from solver.post import report  # noqa: E402
-from common.case import read_case  # noqa: E402
-from solver.dynamics.time_loop import Observer, run  # noqa: E402
+from solver.installation import checkpoint
+from solver.post import report
+from common.case import read_case
+from solver.dynamics.time_loop import Observer, run
 from solver.installation.case import InstallationCase
 from solver.installation.model import attach_vibration, JointModel, set_up_joint_model, settled_modes
 from solver.installation.frequencies import choose_frequencies
-from solver.dynamics.loads import Schedule, Stage  # noqa: E402
-from solver.modal.ranking import describe_modes, JointParts  # noqa: E402
-from solver.installation.cli import COARSE_FRICTIONAL  # noqa: E402  (the default run's joint and contact settings)
+from solver.dynamics.loads import Schedule, Stage
+from solver.modal.ranking import describe_modes, JointParts
+from solver.installation.cli import COARSE_FRICTIONAL  # the default run's joint and contact settings
 
 @dataclass
 class SettledJoint:

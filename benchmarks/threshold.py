@@ -27,16 +27,14 @@ import pathlib
 import sys
 import time
 
-sys.path.insert(0, str(pathlib.Path(__file__).resolve().parent.parent))
+from common import backend  # noqa: F401
 
-from common import backend  # noqa: E402,F401
+from mpi4py import MPI
 
-from mpi4py import MPI  # noqa: E402
-
-from benchmarks.scenarios import gain, harmonic_stage, late_gain, settle  # noqa: E402
-from solver.installation import checkpoint  # noqa: E402
-from solver.post import report  # noqa: E402
-from solver.installation.cli import COARSE_FRICTIONAL  # noqa: E402
+from benchmarks.scenarios import gain, harmonic_stage, late_gain, settle
+from solver.installation import checkpoint
+from solver.post import report
+from solver.installation.cli import COARSE_FRICTIONAL
 
 AMPLITUDE_DRIVEN = 5.0  #: a branch gaining more than this x the gain at A is amplitude-driven [-]
 #: the self-weight stage of the scenario tests (tests/test_install_vibration.py): 1 s ramp

@@ -26,22 +26,20 @@ Usage: mpirun -n 2 python demos/dismount.py [--pull 6e3] [--pull-ramp 0.05] [--p
 import sys
 from pathlib import Path
 
-sys.path.insert(0, str(Path(__file__).resolve().parent.parent))  # run from a checkout
+from common import backend  # noqa: F401  (before dolfinx)
 
-from common import backend  # noqa: F401,E402  (before dolfinx)
+from mpi4py import MPI
 
-from mpi4py import MPI  # noqa: E402
-
-from solver.installation import cli as demo_cli  # noqa: E402
-from solver.installation.dismount import (  # noqa: E402
+from solver.installation import cli as demo_cli
+from solver.installation.dismount import (
     DISMOUNT_COLUMNS,
     DismountPlan,
     dismount_case,
     dismount_table,
     pull_out_force,
 )
-from solver.post.csv import write_csv  # noqa: E402
-from solver.post.plots import plot_dismount  # noqa: E402
+from solver.post.csv import write_csv
+from solver.post.plots import plot_dismount
 
 #: the coarse joint is stiff (8 around locks, SPEC 4): its modes start near 140 Hz, so ranked
 #: frequencies up to 700 Hz are allowed

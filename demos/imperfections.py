@@ -31,17 +31,15 @@ import math
 import sys
 from pathlib import Path
 
-sys.path.insert(0, str(Path(__file__).resolve().parent.parent))  # run from a checkout
+from common import backend  # noqa: F401  (before dolfinx)
 
-from common import backend  # noqa: F401,E402  (before dolfinx)
+import numpy as np
+from mpi4py import MPI
 
-import numpy as np  # noqa: E402
-from mpi4py import MPI  # noqa: E402
-
-from geometry.contact_map import plot_contact_map, rigid_contact_map  # noqa: E402
-from geometry.imperfections import DeviationMap, ovality, read_imperfection  # noqa: E402
-from geometry.parameters import ConePart  # noqa: E402
-from solver.installation import cli as demo_cli  # noqa: E402
+from geometry.contact_map import plot_contact_map, rigid_contact_map
+from geometry.imperfections import DeviationMap, ovality, read_imperfection
+from geometry.parameters import ConePart
+from solver.installation import cli as demo_cli
 
 DEFAULT = demo_cli.COARSE_FRICTIONAL + ["vibration.n_modes=20", "vibration.stage_duration_s=0.03",
                                         "vibration.modal_stage=false"]

@@ -14,18 +14,15 @@ Usage: mpirun -n 2 python demos/install.py [--case scaled] [--set table.key=valu
 
 import argparse
 import sys
-from pathlib import Path
 
-sys.path.insert(0, str(Path(__file__).resolve().parent.parent))  # run from a checkout
+from common import backend  # noqa: F401  (before dolfinx)
 
-from common import backend  # noqa: F401,E402  (before dolfinx)
+from mpi4py import MPI
 
-from mpi4py import MPI  # noqa: E402
-
-from solver.installation import cli as demo_cli  # noqa: E402
-from common.case import read_case  # noqa: E402
-from solver.installation.runner import Installation  # noqa: E402
-from solver.installation.case import InstallationCase  # noqa: E402
+from solver.installation import cli as demo_cli
+from common.case import read_case
+from solver.installation.runner import Installation
+from solver.installation.case import InstallationCase
 
 #: --quick: coarse mesh, a fast self-weight ramp, no lead-in, short stages and frictionless
 #: contact (a smoke run of every stage and output; with friction, Newton stalls on this coarse

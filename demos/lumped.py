@@ -18,18 +18,16 @@ import sys
 import time
 from pathlib import Path
 
-sys.path.insert(0, str(Path(__file__).resolve().parents[1]))  # repo packages
+from common import backend  # noqa: F401  (before mpi4py)
+from mpi4py import MPI
 
-from common import backend  # noqa: E402,F401  (before mpi4py)
-from mpi4py import MPI  # noqa: E402
+import numpy as np
 
-import numpy as np  # noqa: E402
-
-from geometry.parameters import JointGeometry, load_geometry  # noqa: E402
-from solver.contact import FrictionLaw  # noqa: E402
-from solver.reduced.lumped import GRAVITY, AxialLoad, LumpedModel, simulate  # noqa: E402
-from solver.post.csv import write_csv  # noqa: E402
-from solver.reduced.shell import JointStiffness, joint_stiffness  # noqa: E402
+from geometry.parameters import JointGeometry, load_geometry
+from solver.contact import FrictionLaw
+from solver.reduced.lumped import GRAVITY, AxialLoad, LumpedModel, simulate
+from solver.post.csv import write_csv
+from solver.reduced.shell import JointStiffness, joint_stiffness
 
 #: SPEC 7 sensitivity cases: (alpha [deg], beta [deg], mu_d)
 SENSITIVITY_CASES = (

@@ -12,8 +12,6 @@ import argparse
 import sys
 from pathlib import Path
 
-sys.path.insert(0, str(Path(__file__).resolve().parent.parent))  # run from a checkout
-
 from common import backend  # noqa: F401  (before dolfinx)
 
 from mpi4py import MPI

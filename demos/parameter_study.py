@@ -21,16 +21,14 @@ import sys
 import time
 from pathlib import Path
 
-sys.path.insert(0, str(Path(__file__).resolve().parent.parent))  # run from a checkout
+from common import backend  # noqa: F401  (before dolfinx)
 
-from common import backend  # noqa: F401,E402  (before dolfinx)
+from mpi4py import MPI
 
-from mpi4py import MPI  # noqa: E402
-
-from solver.installation import cli as demo_cli  # noqa: E402
-from solver.post.csv import write_csv  # noqa: E402
-from solver.post.plots import plot_parameter_study  # noqa: E402
-from solver.installation.parameter_study import (  # noqa: E402
+from solver.installation import cli as demo_cli
+from solver.post.csv import write_csv
+from solver.post.plots import plot_parameter_study
+from solver.installation.parameter_study import (
     SUMMARY_COLUMNS,
     select,
     summary_rows,

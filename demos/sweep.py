@@ -24,19 +24,17 @@ Usage: mpirun -n 2 python demos/sweep.py [--sweep steps|ramp] [--f-start HZ] [--
 import sys
 from pathlib import Path
 
-sys.path.insert(0, str(Path(__file__).resolve().parent.parent))  # run from a checkout
+from common import backend  # noqa: F401  (before dolfinx)
 
-from common import backend  # noqa: F401,E402  (before dolfinx)
+from dataclasses import asdict
 
-from dataclasses import asdict  # noqa: E402
+from mpi4py import MPI
 
-from mpi4py import MPI  # noqa: E402
-
-from solver.installation import cli as demo_cli  # noqa: E402
-from solver.post import report  # noqa: E402
-from solver.post.csv import write_csv  # noqa: E402
-from solver.post.plots import plot_sweep  # noqa: E402
-from solver.dynamics.loads import frequency_ramp, frequency_steps  # noqa: E402
+from solver.installation import cli as demo_cli
+from solver.post import report
+from solver.post.csv import write_csv
+from solver.post.plots import plot_sweep
+from solver.dynamics.loads import frequency_ramp, frequency_steps
 
 DEFAULT = demo_cli.COARSE_FRICTIONAL + ["vibration.n_modes=20"]
 #: per sweep kind: f_start, f_stop [Hz], then f_step [Hz] and dwell [s] or the ramp duration [s]

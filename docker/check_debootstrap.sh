@@ -6,7 +6,9 @@
 # same docker/apt_install.sh) and the same environment (the Dockerfile's
 # `ENV KEY=VALUE` lines). Then, as root in a private mount namespace, it mounts
 # /proc, /sys, /dev, /dev/pts and a fresh /dev/shm in the root, bind-mounts the
-# checkout read-only at /src and runs the test suite there (CTest: serial and
+# checkout read-only at /src, copies it to /opt/slipjoint (the image's COPY, without
+# what docker/Dockerfile.dockerignore leaves out), installs the project there as the
+# image does (pip install --no-deps -e .) and runs the test suite (CTest: serial and
 # 2-rank tests, demo --quick runs). It prints the suite's result, its wall time
 # and the installed versions of the listed packages.
 #
@@ -69,8 +71,12 @@ cat >"$root/tmp/slipjoint-docker/run_suite.sh" <<'EOF'
 #!/bin/sh
 # Runs inside the root: the Dockerfile's test stage, then optionally its CMD.
 set -u
-rm -rf "${XDG_CACHE_HOME:-/root/.cache}/fenics" /tmp/slipjoint-build /tmp/slipjoint-output
-cmake -S /src -B /tmp/slipjoint-build -DPYTHON=/usr/bin/python3 -DMPIEXEC=/usr/bin/mpirun >/dev/null || exit 1
+rm -rf "${XDG_CACHE_HOME:-/root/.cache}/fenics" /tmp/slipjoint-build /tmp/slipjoint-output /opt/slipjoint
+mkdir -p /opt/slipjoint
+(cd /src && tar --exclude=./.git --exclude=./.venv --exclude=./build --exclude=./output \
+    --exclude='*.egg-info' --exclude=__pycache__ --exclude='*.pyc' -cf - .) | tar -C /opt/slipjoint -xf - || exit 1
+(cd /opt/slipjoint && python3 -m pip install --quiet --no-deps --no-build-isolation --break-system-packages -e .) || exit 1
+cmake -S /opt/slipjoint -B /tmp/slipjoint-build -DPYTHON=/usr/bin/python3 -DMPIEXEC=/usr/bin/mpirun >/dev/null || exit 1
 start=$(date +%s)
 (cd /tmp/slipjoint-build && ctest --output-on-failure --timeout 1800 "$@")
 status=$?
@@ -81,7 +87,7 @@ sed 's/\x1b\[[0-9;]*m//g' /tmp/slipjoint-build/Testing/Temporary/LastTest.log | 
     /^=* ?[0-9]+ (passed|failed|skipped|error|deselected).* in [0-9.]+s/ && !shown { printf "  %-34s %s\n", name, $0; shown = 1 }'
 if [ "${RUN_DEMO:-false}" = true ]; then
     start=$(date +%s)
-    (cd /src && mpirun -n 2 python3 demos/install.py --output /tmp/slipjoint-output)
+    (cd /opt/slipjoint && mpirun -n 2 python3 demos/install.py --output /tmp/slipjoint-output)
     demo_status=$?
     echo "== demo wall time: $(( $(date +%s) - start )) s (exit status $demo_status)"
     ls -l /tmp/slipjoint-output

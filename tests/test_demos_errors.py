@@ -1,23 +1,12 @@
 """Bad options of the sweep, dismount, imperfection and parameter-study demos end with exit
 code 2 and a message naming the problem, before anything is computed or written."""
 
-import importlib.util
 from pathlib import Path
 
 import pytest
 from mpi4py import MPI
 
 pytestmark = pytest.mark.mpi
-
-DEMOS = Path(__file__).resolve().parents[1] / "demos"
-
-
-def _main(name: str):
-    spec = importlib.util.spec_from_file_location(f"demo_{name}", DEMOS / f"{name}.py")
-    module = importlib.util.module_from_spec(spec)
-    spec.loader.exec_module(module)
-    return module.main
-
 
 @pytest.mark.parametrize(
     "demo, options, words",
@@ -37,11 +26,11 @@ def _main(name: str):
         ("parameter_study", ["--set", "mesh.n_circumferential=10"], ["multiple of 4"]),
     ],
 )
-def test_bad_options_exit_2_before_computing(demo, options, words, tmp_path_factory, capsys):
+def test_bad_options_exit_2_before_computing(demo, options, words, demo_main, tmp_path_factory, capsys):
     comm = MPI.COMM_WORLD
     root = Path(comm.bcast(str(tmp_path_factory.mktemp("demo")) if comm.rank == 0 else None))
     out = root / "out"
-    code = _main(demo)(options + ["--output", str(out), "--no-progress"])
+    code = demo_main(demo)(options + ["--output", str(out), "--no-progress"])
     assert code == 2
     assert not out.exists()  # nothing written
     if comm.rank == 0:

@@ -82,18 +82,16 @@ def read_case_text() -> str:
     return resolve_case_path("scaled").read_text()
 
 
-def test_demo_rejects_bad_options_before_computing(tmp_path_factory, capsys):
-    import demos.install as demo
-
+def test_demo_rejects_bad_options_before_computing(demo_main, tmp_path_factory, capsys):
     comm = MPI.COMM_WORLD
     out = comm.bcast(
         str(tmp_path_factory.mktemp("out") / "run") if comm.rank == 0 else None, root=0
     )
-    assert demo.main(["--mu-s", "-1", "--output", out]) == 2
-    assert demo.main(["--case", "no_such_case", "--output", out]) == 2
-    assert demo.main(["--set", "friction.d_c", "--output", out]) == 2
+    assert demo_main("install")(["--mu-s", "-1", "--output", out]) == 2
+    assert demo_main("install")(["--case", "no_such_case", "--output", out]) == 2
+    assert demo_main("install")(["--set", "friction.d_c", "--output", out]) == 2
     assert (
-        demo.main(
+        demo_main("install")(
             [
                 "--resume",
                 "--output",

@@ -5,15 +5,13 @@ and mesh counts, and writes to --output: joint.xdmf/.h5 (mesh, cell and facet
 tags, ParaView), contact_map.png (rigid overlay: onset map and contact fraction)
 and contact_fraction.csv.
 
-Usage: mpirun -n 2 python demos/geometry.py [--case scaled] [--quick] [--output DIR]
+Usage: mpirun -n 2 python demos/joint_geometry.py [--case scaled] [--quick] [--output DIR]
        [--imperfection tp=scans.csv] [--tp-ovality-mm 0.5] [--set mesh.n_layers=2 ...]
 """
 
 import argparse
 import sys
 from pathlib import Path
-
-sys.path.insert(0, str(Path(__file__).resolve().parent.parent))  # run from a checkout
 
 from common import backend  # noqa: F401  (before dolfinx)
 
