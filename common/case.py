@@ -1,10 +1,15 @@
 """Case files: a TOML file plus command-line overrides, checked before any computation.
 
 A case is a nested dict of TOML tables ([geometry.mp], [material], [mesh],
-[friction], [damping], [loading], [[schedule]], ...). Overrides use dotted keys,
-``--set friction.mu_s=0.3 --set mesh.n_circumferential=24``; the value is read as
-TOML (numbers, booleans, strings, arrays), and a bare word as a string. Each
-table is turned into a typed object by its owner's ``from_dict`` through
+[friction], [damping], [loading], [[schedule]], ...). A case file may start from
+another one: ``extends = "coarse"`` (a preset name in ``cases/``, or a path, looked up
+beside the file first) takes that case and lays the file's own tables over it (a deep
+merge of tables: the file wins key by key; arrays, also arrays of tables, are replaced
+whole). Parents may extend further; an unknown parent or a cycle is an error.
+
+Overrides use dotted keys, ``--set friction.mu_s=0.3 --set mesh.n_circumferential=24``;
+the value is read as TOML (numbers, booleans, strings, arrays), and a bare word as a
+string. Each table is turned into a typed object by its owner's ``from_dict`` through
 :func:`construct`, which names the table and key of any problem.
 """
 
@@ -20,26 +25,68 @@ CASES_DIR = Path(__file__).resolve().parent.parent / "cases"
 DEFAULT_CASE = CASES_DIR / "scaled.toml"
 
 
+def presets() -> list[str]:
+    """The names of the case files in ``cases/``."""
+    return sorted(p.stem for p in CASES_DIR.glob("*.toml"))
+
+
 def resolve_case_path(name: str | Path) -> Path:
-    """A case file path, or the name of a file in ``cases/`` (``scaled``, ``full_scale``)."""
+    """A case file path, or the name of a file in ``cases/`` (``scaled``, ``coarse``, ...)."""
     path = Path(name)
     if path.is_file():
         return path
     preset = CASES_DIR / f"{path.stem}.toml"
     if preset.is_file():
         return preset
-    known = sorted(p.stem for p in CASES_DIR.glob("*.toml"))
-    raise ValueError(f"case file {str(name)!r} not found (and no preset of that name; presets: {known})")
+    raise ValueError(f"case file {str(name)!r} not found (and no preset of that name; presets: {presets()})")
+
+
+def _parent_path(child: Path, parent: Any) -> Path:
+    """The file that ``extends = parent`` in ``child`` names: beside the child, else a preset."""
+    if not isinstance(parent, str) or not parent:
+        raise ValueError(f"{child}: extends must name a case (a preset or a file), got {parent!r}")
+    for candidate in (child.parent / parent, child.parent / f"{parent}.toml"):
+        if candidate.is_file():
+            return candidate
+    try:
+        return resolve_case_path(parent)
+    except ValueError:
+        raise ValueError(f"{child}: extends {parent!r}, which is neither a file beside it nor a preset "
+                         f"(presets: {presets()})") from None
+
+
+def merge(base: dict[str, Any], over: dict[str, Any]) -> dict[str, Any]:
+    """``over`` laid over ``base`` (new dicts): tables merged key by key, anything else replaced."""
+    out = copy.deepcopy(base)
+    for key, value in over.items():
+        if isinstance(value, dict) and isinstance(out.get(key), dict):
+            out[key] = merge(out[key], value)
+        else:
+            out[key] = copy.deepcopy(value)
+    return out
+
+
+def _load(path: Path, chain: tuple[Path, ...] = ()) -> dict[str, Any]:
+    """The case of ``path`` with its ``extends`` chain resolved; ``chain``: the children."""
+    resolved = path.resolve()
+    if resolved in chain:
+        cycle = " -> ".join(str(p) for p in (*chain, resolved))
+        raise ValueError(f"{path}: extends forms a cycle: {cycle}")
+    try:
+        with path.open("rb") as f:
+            data = tomllib.load(f)
+    except tomllib.TOMLDecodeError as e:
+        raise ValueError(f"{path}: invalid TOML: {e}") from None
+    if "extends" not in data:
+        return data
+    parent = _parent_path(path, data.pop("extends"))
+    return merge(_load(parent, (*chain, resolved)), data)
 
 
 def read_case(name: str | Path = DEFAULT_CASE, overrides: list[str] | None = None) -> dict[str, Any]:
-    """Read a TOML case file and apply ``key.path=value`` overrides."""
+    """Read a TOML case file (resolving ``extends``) and apply ``key.path=value`` overrides."""
     path = resolve_case_path(name)
-    try:
-        with path.open("rb") as f:
-            case = tomllib.load(f)
-    except tomllib.TOMLDecodeError as e:
-        raise ValueError(f"{path}: invalid TOML: {e}") from None
+    case = _load(path)
     for item in overrides or []:
         apply_override(case, item)
     case["_source"] = str(path)
