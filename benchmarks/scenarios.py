@@ -20,7 +20,7 @@ gained in each branch [mm] and the SPEC 5 criteria: frequency-driven (a) >= 5 (b
 (SPEC 5.2), amplitude-driven (c) > 5 (b) (5.3), stabilisation of each event: the last 20 %
 of a stage adds less than 5 % of its gain (5.2).
 
-    mpirun -n 2 python benchmarks/scenarios.py                       # coarse joint (as demos/install.py)
+    mpirun -n 2 python benchmarks/scenarios.py                       # cases/coarse.toml (as demos/install.py)
     python benchmarks/scenarios.py --set mesh.n_circumferential=16 --duration 0.1
 
 The functions are shared with tests/test_install_vibration.py.
@@ -48,7 +48,6 @@ from solver.installation.model import attach_vibration, JointModel, set_up_joint
 from solver.installation.frequencies import choose_frequencies
 from solver.dynamics.loads import Schedule, Stage
 from solver.modal.ranking import describe_modes, JointParts
-from solver.installation.cli import COARSE_FRICTIONAL  # the default run's joint and contact settings
 
 @dataclass
 class SettledJoint:
@@ -60,7 +59,7 @@ class SettledJoint:
     frequencies_hz: np.ndarray  #: natural frequencies of the settled joint [Hz]
 
 
-def settle(comm: MPI.Comm, overrides: list[str], case_name: str = "scaled") -> SettledJoint:
+def settle(comm: MPI.Comm, overrides: list[str], case_name: str = "coarse") -> SettledJoint:
     """Build the joint of the case with ``overrides``, run its self-weight stage and choose
     f_r and f_c as the installation run does (collective)."""
     case = InstallationCase.from_dict(read_case(case_name, overrides))
@@ -117,7 +116,7 @@ def stabilised(history: np.ndarray) -> bool:
 
 def main(argv=None) -> int:
     p = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    p.add_argument("--case", default="scaled")
+    p.add_argument("--case", default="coarse", help="case: a preset name or a TOML file (default: coarse)")
     p.add_argument("--set", action="append", default=[], metavar="TABLE.KEY=VALUE")
     p.add_argument("--amplitude", type=float, default=3600.0, help="force amplitude A [N]")
     p.add_argument("--factor", type=float, default=2.0, help="amplitude factor of branch (c)")
@@ -129,7 +128,7 @@ def main(argv=None) -> int:
     say = print if comm.rank == 0 else (lambda *args, **kw: None)
     out = pathlib.Path(a.output)
     wall = time.perf_counter()
-    joint = settle(comm, COARSE_FRICTIONAL + a.set, a.case)
+    joint = settle(comm, a.set, a.case)
     model, f_r, f_c = joint.model, joint.f_r, joint.f_c
     problem = model.problem
     say(f"joint: {model.n_dofs} dofs, {comm.size} rank(s)")

@@ -15,7 +15,7 @@ the largest factor below the first amplitude-driven branch and that branch's fac
 adds that, below the threshold, a larger amplitude at a non-effective frequency gives no
 additional settlement: the branches between k = 1 and the threshold show whether it does.
 
-    mpirun -n 2 python benchmarks/threshold.py                       # coarse joint (as demos/install.py)
+    mpirun -n 2 python benchmarks/threshold.py                       # cases/scenario.toml
     python benchmarks/threshold.py --factors 1 1.5 2 3 --duration 0.1
 
 Printed and written to ``--output``/threshold.csv (units in the header).
@@ -34,16 +34,14 @@ from mpi4py import MPI
 from benchmarks.scenarios import gain, harmonic_stage, late_gain, settle
 from solver.installation import checkpoint
 from solver.post import report
-from solver.installation.cli import COARSE_FRICTIONAL
 
 AMPLITUDE_DRIVEN = 5.0  #: a branch gaining more than this x the gain at A is amplitude-driven [-]
 #: the self-weight stage of the scenario tests (tests/test_install_vibration.py): 1 s ramp
-SCENARIO = COARSE_FRICTIONAL + ["self_weight.ramp_time_s=1.0", "self_weight.dt_s=0.01"]
 
 
 def main(argv=None) -> int:
     p = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    p.add_argument("--case", default="scaled")
+    p.add_argument("--case", default="scenario", help="case: a preset name or a TOML file (default: scenario)")
     p.add_argument("--set", action="append", default=[], metavar="TABLE.KEY=VALUE")
     p.add_argument("--amplitude", type=float, default=3600.0, help="force amplitude A [N]")
     p.add_argument("--factors", type=float, nargs="+", default=[1.0, 1.25, 1.5, 1.75, 2.0],
@@ -58,7 +56,7 @@ def main(argv=None) -> int:
     say = print if comm.rank == 0 else (lambda *args, **kw: None)
     out = pathlib.Path(a.output)
     wall = time.perf_counter()
-    joint = settle(comm, SCENARIO + a.set, a.case)
+    joint = settle(comm, a.set, a.case)
     model, f_c = joint.model, joint.f_c
     problem = model.problem
     say(f"joint: {model.n_dofs} dofs, {comm.size} rank(s); self-weight settlement "

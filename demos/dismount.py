@@ -9,18 +9,19 @@ moves up) and whether it separated (contact normal force -> 0). Outputs in --out
 dismount.csv, dismount.png, and everything of the installation run (history.csv, stages.csv,
 modes.csv, frequencies.csv, plots, summary.txt).
 
-Without options: the very coarse frictional joint of the demos/install.py default run
-(8 around, 0.25 m; the contact settings with which the frictional Newton solve converges),
-short stages. After the self-weight stage alone this joint is held by a contact normal force of
+Without options: cases/dismount.toml (the very coarse frictional joint of the demos/install.py
+default run, 8 around, 0.25 m, with the contact settings with which the frictional Newton
+solve converges; ranked frequencies up to 700 Hz), short stages. After the self-weight stage alone this joint is held by a contact normal force of
 about 19 kN, so its rigid Coulomb pull-out force N (mu cos(alpha) - sin(alpha)) is 7.4-9.4 kN
 (printed): the default pull of 6 kN lies below it, a pull in SPEC 3's rig range (10-40 kN,
-e.g. --pull 20e3) frees this joint without vibration. --quick: the tiny joint with the landing contact settings and very short stages
-(a smoke run: the TP is still sliding at the end of its 12 ms self-weight ramp, so little
-normal force has built up and the pull alone separates it).
+e.g. --pull 20e3) frees this joint without vibration. --quick: --case dismount_quick (the tiny
+joint with the landing contact settings) and very short stages (a smoke run: the TP is still
+sliding at the end of its 12 ms self-weight ramp, so little normal force has built up and the
+pull alone separates it).
 
 Usage: mpirun -n 2 python demos/dismount.py [--pull 6e3] [--pull-ramp 0.05] [--pull-hold 0.05]
        [--install-stages 0] [--n-frequencies 2] [--stage-duration 0.03] [--amplitude 3600]
-       [--case scaled] [--set table.key=value ...] [--quick] [--output DIR]
+       [--case dismount] [--set table.key=value ...] [--quick] [--output DIR]
 """
 
 import sys
@@ -30,7 +31,7 @@ from common import backend  # noqa: F401  (before dolfinx)
 
 from mpi4py import MPI
 
-from solver.installation import cli as demo_cli
+from solver.installation import cli
 from solver.installation.dismount import (
     DISMOUNT_COLUMNS,
     DismountPlan,
@@ -41,14 +42,13 @@ from solver.installation.dismount import (
 from solver.post.csv import write_csv
 from solver.post.plots import plot_dismount
 
-#: the coarse joint is stiff (8 around locks, SPEC 4): its modes start near 140 Hz, so ranked
-#: frequencies up to 700 Hz are allowed
-DEFAULT = demo_cli.COARSE_FRICTIONAL + ["vibration.n_modes=20", "vibration.max_frequency_hz=700"]
+DEFAULT_CASE = "dismount"
+QUICK_CASE = "dismount_quick"
 QUICK_PLAN = {"ramp_s": 0.004, "hold_s": 0.012, "stage_duration_s": 0.004, "n_frequencies": 1}
 
 
 def main(argv: list[str] | None = None) -> int:
-    p = demo_cli.parser(__doc__.splitlines()[0], "output/dismount")
+    p = cli.parser(__doc__.splitlines()[0], "output/dismount", DEFAULT_CASE, QUICK_CASE)
     p.add_argument("--pull", type=float, default=6e3,
                    help="upward pulling force [N] (6 kN; SPEC 3 rig: 10-40 kN)")
     p.add_argument("--pull-ramp", type=float,
@@ -61,7 +61,7 @@ def main(argv: list[str] | None = None) -> int:
     p.add_argument("--amplitude", type=float, default=3600.0, help="vibration force amplitude [N]")
     args = p.parse_args(argv)
     comm = MPI.COMM_WORLD
-    log = demo_cli.say(comm)
+    log = cli.say(comm)
     given = {"ramp_s": args.pull_ramp, "hold_s": args.pull_hold,
              "stage_duration_s": args.stage_duration, "n_frequencies": args.n_frequencies}
     base = QUICK_PLAN if args.quick else {"stage_duration_s": 0.03, "n_frequencies": 2}
@@ -69,17 +69,17 @@ def main(argv: list[str] | None = None) -> int:
         plan = DismountPlan(pull_N=args.pull, n_install=args.install_stages,
                             amplitude_N=args.amplitude,
                             **{**base, **{k: v for k, v in given.items() if v is not None}})
-        case = demo_cli.load_case(args, demo_cli.overrides(args, DEFAULT, demo_cli.QUICK),
-                                  lambda data: dismount_case(data, plan))
+        case = cli.load_case(args, edit=lambda data: dismount_case(data, plan))
+        cli.prepare_output(comm, args.output)
     except ValueError as e:
-        return demo_cli.fail(comm, str(e))
+        return cli.fail(comm, str(e))
     log(f"dismount: {-case.self_weight.force_N / 1e3:.1f} kN self-weight, {plan.n_install} "
         f"installation stage(s), pull {plan.pull_N / 1e3:.1f} kN up (ramp {plan.ramp_s} s, "
         f"alone {plan.hold_s} s), "
         f"then {plan.n_frequencies} stage(s) of pull + {plan.amplitude_N:.0f} N at the ranked "
         f"frequencies, {plan.stage_duration_s} s each"
         + (" [--quick: tiny joint, very short stages, a smoke run]" if args.quick else ""))
-    runner, code = demo_cli.run(comm, case, args.output, progress=not args.no_progress)
+    runner, code = cli.run(comm, case, args.output, progress=not args.no_progress)
     if runner.model is None or len(runner.stages) < 2:
         return code
     out = Path(args.output)

@@ -18,12 +18,12 @@ amplitude (history.csv, stages.csv, contact_status_<k>.png, summary.txt, ...). -
 maps. The modal stage is off by default (--modal turns it on): while the imperfect TP rests on a
 few points it is a mechanism with zero-frequency modes, on which the mode ranking fails.
 
-Without options: the very coarse frictional joint of the demos/install.py default run.
---quick: coarser contact map grids and the tiny joint (demos' common quick settings) with
-4 ms stages (a smoke run, not physics).
+Without options: cases/imperfections.toml (the very coarse frictional joint of the
+demos/install.py default run). --quick: coarser contact map grids and --case
+imperfections_quick (the demos' smoke-run joint with 4 ms stages; not physics).
 
 Usage: mpirun -n 2 python demos/imperfections.py [--scan FILE] [--ovality-mm 0.3]
-       [--mp-ovality-mm 0] [--no-run] [--case scaled] [--set table.key=value ...]
+       [--mp-ovality-mm 0] [--no-run] [--case imperfections] [--set table.key=value ...]
        [--quick] [--output DIR]
 """
 
@@ -39,11 +39,10 @@ from mpi4py import MPI
 from geometry.contact_map import plot_contact_map, rigid_contact_map
 from geometry.imperfections import DeviationMap, ovality, read_imperfection
 from geometry.parameters import ConePart
-from solver.installation import cli as demo_cli
+from solver.installation import cli
 
-DEFAULT = demo_cli.COARSE_FRICTIONAL + ["vibration.n_modes=20", "vibration.stage_duration_s=0.03",
-                                        "vibration.modal_stage=false"]
-QUICK = demo_cli.QUICK + ["vibration.stage_duration_s=0.004"]
+DEFAULT_CASE = "imperfections"
+QUICK_CASE = "imperfections_quick"
 #: the run after self-weight: the SPEC 3 lead-in stages at the eccentric amplitude
 LEAD_IN_HZ = (68.0, 100.0)
 
@@ -117,7 +116,7 @@ def plot_map(deviation: DeviationMap, path: Path) -> None:
 
 
 def main(argv: list[str] | None = None) -> int:
-    p = demo_cli.parser(__doc__.splitlines()[0], "output/imperfections")
+    p = cli.parser(__doc__.splitlines()[0], "output/imperfections", DEFAULT_CASE, QUICK_CASE)
     p.add_argument("--scan", help="TP scan or map file (CSV); default: write a synthetic scan")
     p.add_argument("--ovality-mm", type=float, default=0.3,
                    help="synthetic scan: m = 2 ovality [mm]")
@@ -126,35 +125,30 @@ def main(argv: list[str] | None = None) -> int:
     p.add_argument("--modal", action="store_true", help="modal stage after self-weight (modes.csv)")
     args = p.parse_args(argv)
     comm = MPI.COMM_WORLD
-    log = demo_cli.say(comm)
+    log = cli.say(comm)
     out = Path(args.output)
-    items = demo_cli.overrides(args, DEFAULT, QUICK)
-    if args.modal:
-        items.insert(len(DEFAULT), "vibration.modal_stage=true")
+    before = ["vibration.modal_stage=true"] if args.modal else []
     try:
         if args.scan is not None and not Path(args.scan).is_file():
             raise ValueError(f"--scan {args.scan}: no such file")
         if not 0 < args.ovality_mm <= 2.0 or not 0 <= args.mp_ovality_mm <= 2.0:
             raise ValueError("--ovality-mm must lie in (0, 2] mm and --mp-ovality-mm in [0, 2] mm")
-        demo_cli.load_case(args, items, lead_in)  # the case without imperfections: check options
+        joint = cli.load_case(args, before, edit=lead_in).joint  # without imperfections: check options
+        cli.prepare_output(comm, out)
     except ValueError as e:
-        return demo_cli.fail(comm, str(e))
+        return cli.fail(comm, str(e))
 
     scan = Path(args.scan) if args.scan else out / "synthetic_scan_tp.csv"
     if comm.rank == 0:
-        out.mkdir(parents=True, exist_ok=True)
         if args.scan is None:
-            joint = demo_cli.load_case(args, items, lead_in).joint
             write_synthetic_scans(scan, joint.tp, 1e-3 * args.ovality_mm, 0.02)
             print(f"wrote synthetic laser ring scans of the TP: {scan}", flush=True)
     comm.barrier()
     mp = [f"imperfections.mp.amplitude_m={1e-3 * args.mp_ovality_mm}"] if args.mp_ovality_mm else []
     try:
-        case = demo_cli.load_case(
-            args, items + [f"imperfections.tp.file='{scan.resolve()}'"] + mp, lead_in
-        )
+        case = cli.load_case(args, before, [f"imperfections.tp.file='{scan.resolve()}'"] + mp, lead_in)
     except ValueError as e:
-        return demo_cli.fail(comm, str(e))
+        return cli.fail(comm, str(e))
     joint = case.joint
 
     if comm.rank == 0:  # maps: analytic surfaces, serial numpy
@@ -203,7 +197,7 @@ def main(argv: list[str] | None = None) -> int:
         return 0
     log("installation run of the imperfect joint"
         + (" [--quick: tiny joint, very short stages, a smoke run]" if args.quick else ""))
-    runner, code = demo_cli.run(comm, case, out, progress=not args.no_progress)
+    runner, code = cli.run(comm, case, out, progress=not args.no_progress)
     return code
 
 

@@ -5,13 +5,13 @@ and mesh counts, and writes to --output: joint.xdmf/.h5 (mesh, cell and facet
 tags, ParaView), contact_map.png (rigid overlay: onset map and contact fraction)
 and contact_fraction.csv.
 
+--quick is --case geometry_quick (24 around, 0.2 m along).
+
 Usage: mpirun -n 2 python demos/joint_geometry.py [--case scaled] [--quick] [--output DIR]
        [--imperfection tp=scans.csv] [--tp-ovality-mm 0.5] [--set mesh.n_layers=2 ...]
 """
 
-import argparse
 import sys
-from pathlib import Path
 
 from common import backend  # noqa: F401  (before dolfinx)
 
@@ -24,10 +24,11 @@ from geometry.contact_map import plot_contact_map, rigid_contact_map
 from geometry.imperfections import ovality, read_imperfection
 from geometry.mesh import create_joint_mesh, write_paraview
 from geometry.parameters import JointGeometry, geometry_from_case
-from common.case import read_case
 from common.material import Material
+from solver.installation import cli
 
-QUICK = ["mesh.n_circumferential=24", "mesh.axial_size=0.2"]
+DEFAULT_CASE = "scaled"
+QUICK_CASE = "geometry_quick"
 
 
 def summary(joint: JointGeometry, material: Material) -> list[str]:
@@ -55,15 +56,7 @@ def summary(joint: JointGeometry, material: Material) -> list[str]:
 
 
 def main(argv: list[str] | None = None) -> int:
-    parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    parser.add_argument("--case", default="scaled", help="case file or preset name (cases/*.toml)")
-    parser.add_argument(
-        "--set",
-        action="append",
-        default=[],
-        metavar="KEY=VALUE",
-        help="override a case entry, e.g. mesh.n_layers=2",
-    )
+    parser = cli.case_parser(__doc__.splitlines()[0], "output/geometry", DEFAULT_CASE, QUICK_CASE)
     parser.add_argument(
         "--imperfection",
         action="append",
@@ -77,8 +70,6 @@ def main(argv: list[str] | None = None) -> int:
         default=0.0,
         help="add a synthetic m = 2 ovality of this amplitude [mm] to the TP",
     )
-    parser.add_argument("--quick", action="store_true", help="coarse mesh (24 around, 0.2 m along)")
-    parser.add_argument("--output", default="output/geometry", help="output folder")
     args = parser.parse_args(argv)
     comm = MPI.COMM_WORLD
 
@@ -87,24 +78,22 @@ def main(argv: list[str] | None = None) -> int:
             print(message, flush=True)
 
     try:
-        joint, material, options = geometry_from_case(
-            read_case(args.case, (QUICK if args.quick else []) + args.set)
-        )
+        joint, material, options = geometry_from_case(cli.read(args))
         imperfections = {}
         for item in args.imperfection:
             name, sep, path = item.partition("=")
             if not sep or name not in ("mp", "tp"):
                 raise ValueError(f"--imperfection {item!r}: expected mp=FILE or tp=FILE")
-            imperfections[name] = read_imperfection(path, getattr(joint, name))
+            imperfections[name] = read_imperfection(path, joint.mp if name == "mp" else joint.tp)
         if args.tp_ovality_mm:
             if "tp" in imperfections:
                 raise ValueError("--tp-ovality-mm and --imperfection tp=... exclude each other")
             imperfections["tp"] = ovality(args.tp_ovality_mm * 1e-3)
+        out = cli.prepare_output(comm, args.output)
     except ValueError as e:
-        log(f"error: {e}")
-        return 2
+        return cli.fail(comm, str(e))
 
-    log(f"slip-joint geometry of {args.case} ({comm.size} rank(s)); SI input, printed in mm / kg")
+    log(f"slip-joint geometry of {cli.case_name(args)} ({comm.size} rank(s)); SI input, printed in mm / kg")
     for line in summary(joint, material):
         log(line)
 
@@ -131,10 +120,6 @@ def main(argv: list[str] | None = None) -> int:
         count = comm.allreduce(int(np.sum(meshtags.find(tag) < n_owned)))
         log(f"  tag {tag:2d} {name:11s}: {count} {'cells' if is_cell else 'facets'}")
 
-    out = Path(args.output)
-    if comm.rank == 0:
-        out.mkdir(parents=True, exist_ok=True)
-    comm.barrier()
     log(f"  ParaView: {write_paraview(mesh_data, out / 'joint')}")
 
     if comm.rank == 0:  # rigid contact map: analytic surfaces, serial numpy

@@ -26,6 +26,7 @@ import numpy as np
 from geometry.parameters import JointGeometry, load_geometry
 from solver.contact import FrictionLaw
 from solver.reduced.lumped import GRAVITY, AxialLoad, LumpedModel, simulate
+from solver.installation import cli
 from solver.post.csv import write_csv
 from solver.reduced.shell import JointStiffness, joint_stiffness
 
@@ -120,9 +121,10 @@ def main(argv: list[str] | None = None) -> int:
     args = parse_args(argv)
     comm = MPI.COMM_WORLD
     root = comm.rank == 0
-    out = Path(args.output)
-    if root:
-        out.mkdir(parents=True, exist_ok=True)
+    try:
+        out = cli.prepare_output(comm, args.output)
+    except ValueError as e:
+        return cli.fail(comm, str(e))
     t_start = time.perf_counter()
 
     joint, material, _ = load_geometry(args.case)

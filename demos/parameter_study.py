@@ -8,13 +8,14 @@ stage at the best-ranked natural frequency and one at the non-modal control freq
 into its own sub-folder of --output. Written as the study goes: summary.csv (settlement per
 stage per variant, mm) and summary.png (settlement gained per stage and variant).
 
-Without options: the very coarse frictional joint of the demos/install.py default run (8
-around, 0.25 m; about 10 minutes per variant on 2 cores). --quick: the tiny joint with the
-landing contact settings, a 12 ms self-weight ramp and one 2 ms stage at 100 Hz (eccentric
-amplitude) without the modal stage, for every variant (a smoke run, not physics).
+Without options: cases/parameter_study.toml (the very coarse frictional joint of the
+demos/install.py default run, 8 around, 0.25 m; about 10 minutes per variant on 2 cores).
+--quick: --case parameter_study_quick (the tiny joint with the landing contact settings, a
+12 ms self-weight ramp and one 2 ms stage at 100 Hz, eccentric amplitude, without the modal
+stage) for every variant (a smoke run, not physics).
 
 Usage: mpirun -n 2 python demos/parameter_study.py [--variants low_friction slow_decay ...]
-       [--case scaled] [--set table.key=value ...] [--quick] [--output DIR]
+       [--case parameter_study] [--set table.key=value ...] [--quick] [--output DIR]
 """
 
 import sys
@@ -25,7 +26,7 @@ from common import backend  # noqa: F401  (before dolfinx)
 
 from mpi4py import MPI
 
-from solver.installation import cli as demo_cli
+from solver.installation import cli
 from solver.post.csv import write_csv
 from solver.post.plots import plot_parameter_study
 from solver.installation.parameter_study import (
@@ -35,39 +36,27 @@ from solver.installation.parameter_study import (
     variants,
 )
 
-DEFAULT = demo_cli.COARSE_FRICTIONAL + [
-    "vibration.n_modes=20",
-    "vibration.lead_in_hz=[]",
-    "vibration.n_frequencies=1",
-    "vibration.m2n1_mode=false",
-    "vibration.stage_duration_s=0.03",
-    "output.paraview=false",
-]
-QUICK = demo_cli.QUICK + [
-    "vibration.modal_stage=false",
-    "schedule=[{duration_s = 0.002, frequency_hz = 100.0, amplitude_N = 'eccentric'}]",
-    "damping.n_modes=4",
-    "output.plots=false",
-]
+DEFAULT_CASE = "parameter_study"
+QUICK_CASE = "parameter_study_quick"
 
 
 def main(argv: list[str] | None = None) -> int:
-    p = demo_cli.parser(__doc__.splitlines()[0], "output/parameter_study")
+    p = cli.parser(__doc__.splitlines()[0], "output/parameter_study", DEFAULT_CASE, QUICK_CASE)
     p.add_argument("--variants", nargs="+", metavar="NAME",
                    help="run only these variants besides the base case "
                    "(low_friction, slow_decay, modal_damping, fine_mesh)")
     args = p.parse_args(argv)
     comm = MPI.COMM_WORLD
-    log = demo_cli.say(comm)
-    items = demo_cli.overrides(args, DEFAULT, QUICK)
+    log = cli.say(comm)
     try:
-        base = demo_cli.load_case(args, items)
+        base = cli.load_case(args)
         study = variants(base.mesh.axial_size)
         if args.variants is not None:
             study = select(study, args.variants)
-        cases = [demo_cli.load_case(args, items + list(v.overrides)) for v in study]
+        cases = [cli.load_case(args, after=v.overrides) for v in study]
+        cli.prepare_output(comm, args.output)
     except ValueError as e:
-        return demo_cli.fail(comm, str(e))
+        return cli.fail(comm, str(e))
     out = Path(args.output)
     log(f"parameter study: {len(study)} runs ({', '.join(v.name for v in study)}) into {out}/<name>"
         + (" [--quick: tiny joint, one 2 ms stage, a smoke run]" if args.quick else ""))
@@ -77,7 +66,7 @@ def main(argv: list[str] | None = None) -> int:
         log(f"\n[{k + 1}/{len(study)}] {variant.name}: {variant.parameter} = {variant.value}")
         wall = time.perf_counter()
         try:
-            runner, status_code = demo_cli.run(comm, case, out / variant.name,
+            runner, status_code = cli.run(comm, case, out / variant.name,
                                                progress=not args.no_progress, log=lambda s: None)
             status = "done" if status_code == 0 else "stopped"
         except ValueError as e:  # e.g. modal damping: time step above its stability limit

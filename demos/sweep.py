@@ -12,13 +12,13 @@ Outputs in --output: sweep.csv (time_s, frequency_Hz, amplitude_N, settlement_mm
 settlement_gain_mm), sweep.png (settlement gained against time and against frequency), and
 the installation outputs (history.csv, stages.csv with the gain per step, modes.csv, ...).
 
-Without options: the very coarse frictional joint of the demos/install.py default run and
-steps of 0.03 s (the SPEC's 0.5 s steps: --dwell 0.5, about 16 x longer). --quick: the tiny
-joint (demos' common quick settings), three 2 ms steps (a smoke run, not physics).
+Without options: cases/sweep.toml (the coarse frictional joint of the demos/install.py default
+run, 20 modes) and steps of 0.03 s (the SPEC's 0.5 s steps: --dwell 0.5, about 16 x longer).
+--quick: --case quick (the demos' smoke-run joint) and three 2 ms steps (not physics).
 
 Usage: mpirun -n 2 python demos/sweep.py [--sweep steps|ramp] [--f-start HZ] [--f-stop HZ]
        [--f-step HZ] [--dwell S] [--ramp-duration S] [--amplitude eccentric|N]
-       [--case scaled] [--set table.key=value ...] [--quick] [--output DIR]
+       [--case sweep] [--set table.key=value ...] [--quick] [--output DIR]
 """
 
 import sys
@@ -30,13 +30,14 @@ from dataclasses import asdict
 
 from mpi4py import MPI
 
-from solver.installation import cli as demo_cli
+from solver.installation import cli
 from solver.post import report
 from solver.post.csv import write_csv
 from solver.post.plots import plot_sweep
 from solver.dynamics.loads import frequency_ramp, frequency_steps
 
-DEFAULT = demo_cli.COARSE_FRICTIONAL + ["vibration.n_modes=20"]
+DEFAULT_CASE = "sweep"
+QUICK_CASE = "quick"
 #: per sweep kind: f_start, f_stop [Hz], then f_step [Hz] and dwell [s] or the ramp duration [s]
 SWEEPS = {
     "steps": {"f_start": 10.0, "f_stop": 130.0, "f_step": 10.0, "dwell": 0.03},
@@ -69,7 +70,7 @@ def amplitude_value(text: str) -> float | str:
 
 
 def main(argv: list[str] | None = None) -> int:
-    p = demo_cli.parser(__doc__.splitlines()[0], "output/sweep")
+    p = cli.parser(__doc__.splitlines()[0], "output/sweep", DEFAULT_CASE, QUICK_CASE)
     p.add_argument("--sweep", choices=list(SWEEPS), default="steps",
                    help="step-wise increase or linear ramp")
     p.add_argument("--f-start", type=float, help="first frequency [Hz] (steps 10, ramp 0)")
@@ -83,7 +84,7 @@ def main(argv: list[str] | None = None) -> int:
                    help="skip the modal stage (no natural frequencies)")
     args = p.parse_args(argv)
     comm = MPI.COMM_WORLD
-    log = demo_cli.say(comm)
+    log = cli.say(comm)
     values = dict((QUICK_SWEEPS if args.quick else SWEEPS)[args.sweep])
     for key in values:
         given = getattr(args, key)
@@ -91,9 +92,7 @@ def main(argv: list[str] | None = None) -> int:
             values[key] = given
     wrong = [k for k in ("f_step", "dwell", "ramp_duration")
              if getattr(args, k) is not None and k not in values]
-    items = demo_cli.overrides(args, DEFAULT, demo_cli.QUICK)
-    if args.no_modal:
-        items.append("vibration.modal_stage=false")
+    after = ["vibration.modal_stage=false"] if args.no_modal else []
     try:
         if wrong:
             option = "--" + wrong[0].replace("_", "-")
@@ -103,16 +102,17 @@ def main(argv: list[str] | None = None) -> int:
         def edit(data: dict) -> None:
             data["schedule"] = [{**s, **_direction(data)} for s in stages]
 
-        case = demo_cli.load_case(args, items, edit)
+        case = cli.load_case(args, after=after, edit=edit)
+        cli.prepare_output(comm, args.output)
     except ValueError as e:
-        return demo_cli.fail(comm, str(e))
+        return cli.fail(comm, str(e))
     what = (f"{values['f_start']:g} -> {values['f_stop']:g} Hz in {values['f_step']:g} Hz steps of "
             f"{values['dwell']:g} s ({len(stages)} steps)" if args.sweep == "steps" else
             f"linear ramp {values['f_start']:g} -> {values['f_stop']:g} Hz over "
             f"{values['ramp_duration']:g} s")
     log(f"sweep: {what}, amplitude {args.amplitude}"
         + (" [--quick: tiny joint, very short stages, a smoke run]" if args.quick else ""))
-    runner, code = demo_cli.run(comm, case, args.output, progress=not args.no_progress)
+    runner, code = cli.run(comm, case, args.output, progress=not args.no_progress)
     if runner.model is None or len(runner.stages) < 2:
         return code
     out = Path(args.output)

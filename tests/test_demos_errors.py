@@ -1,12 +1,16 @@
-"""Bad options of the sweep, dismount, imperfection and parameter-study demos end with exit
-code 2 and a message naming the problem, before anything is computed or written."""
-
-from pathlib import Path
+"""Bad options of the demos end with exit code 2 and a message naming the problem, before
+anything is computed or written: bad case entries and options, --quick with another --case,
+an output folder that cannot be created or written."""
 
 import pytest
 from mpi4py import MPI
 
 pytestmark = pytest.mark.mpi
+
+DEMOS = ("install", "sweep", "dismount", "imperfections", "parameter_study", "joint_geometry", "modal",
+         "lumped")
+WITHOUT_PROGRESS_BAR = ("joint_geometry", "modal", "lumped")
+
 
 @pytest.mark.parametrize(
     "demo, options, words",
@@ -24,13 +28,18 @@ pytestmark = pytest.mark.mpi
         ("imperfections", ["--ovality-mm", "5"], ["--ovality-mm"]),
         ("parameter_study", ["--variants", "wet_friction"], ["unknown variant", "wet_friction"]),
         ("parameter_study", ["--set", "mesh.n_circumferential=10"], ["multiple of 4"]),
+        ("install", ["--quick", "--case", "scaled"], ["--quick is --case install_quick"]),
+        ("install", ["--full", "--quick"], ["--full is --case scaled"]),
+        ("sweep", ["--quick", "--case", "coarse"], ["--quick is --case quick"]),
+        ("modal", ["--quick", "--case", "full_scale"], ["--quick is --case modal_quick"]),
+        ("joint_geometry", ["--case", "no_such_case"], ["no_such_case", "presets"]),
     ],
 )
-def test_bad_options_exit_2_before_computing(demo, options, words, demo_main, tmp_path_factory, capsys):
+def test_bad_options_exit_2_before_computing(demo, options, words, demo_main, shared_tmp, capsys):
     comm = MPI.COMM_WORLD
-    root = Path(comm.bcast(str(tmp_path_factory.mktemp("demo")) if comm.rank == 0 else None))
-    out = root / "out"
-    code = demo_main(demo)(options + ["--output", str(out), "--no-progress"])
+    out = shared_tmp / "out"
+    quiet = [] if demo in WITHOUT_PROGRESS_BAR else ["--no-progress"]
+    code = demo_main(demo)(options + ["--output", str(out)] + quiet)
     assert code == 2
     assert not out.exists()  # nothing written
     if comm.rank == 0:
@@ -38,3 +47,21 @@ def test_bad_options_exit_2_before_computing(demo, options, words, demo_main, tm
         assert message.startswith("error: ")
         for w in words:
             assert w in message, message
+
+
+@pytest.mark.parametrize("demo", DEMOS)
+def test_unwritable_output_folder_exits_2_before_computing(demo, demo_main, shared_tmp, capsys):
+    """An --output folder below a file cannot be created: error and exit code 2."""
+    comm = MPI.COMM_WORLD
+    blocker = shared_tmp / "a_file"
+    if comm.rank == 0:
+        blocker.write_text("not a folder\n")
+    comm.barrier()
+    options = ["--quick", "--output", str(blocker / "out")]
+    quiet = [] if demo in WITHOUT_PROGRESS_BAR else ["--no-progress"]
+    code = demo_main(demo)(options + quiet)
+    assert code == 2
+    if comm.rank == 0:
+        message = capsys.readouterr().err
+        assert message.startswith("error: ") and "cannot be created or written" in message, message
+        assert str(blocker / "out") in message

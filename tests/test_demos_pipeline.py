@@ -1,5 +1,6 @@
-"""The installation pipeline with the demos' settings on the tiny joint (12 around, 0.2 m,
-degree 2, frictionless as in tests/test_install_pipeline.py):
+"""The installation pipeline with the demos' settings on the tiny joint (cases/tiny.toml: 12
+around, 0.2 m, degree 2, frictionless, as in tests/test_install_pipeline.py; here 8 steps a
+period, checkpoints every 50 steps, no ParaView files):
 
 * an ovality of the TP set in ``[imperfections.tp]`` reaches the mesh: the TP's inner-surface
   nodes deviate from the nominal cone by A cos(2 (theta - phase)), and the TP is placed higher
@@ -10,7 +11,6 @@ degree 2, frictionless as in tests/test_install_pipeline.py):
 """
 
 import math
-from pathlib import Path
 
 import numpy as np
 import pytest
@@ -25,27 +25,13 @@ from solver.installation.model import set_up_joint_model
 
 pytestmark = pytest.mark.mpi
 
-TINY = [
-    "mesh.n_circumferential=12",
-    "mesh.axial_size=0.2",
-    "friction.mu_s=0.0",
-    "friction.mu_d=0.0",
-    "self_weight.ramp_time_s=0.012",
-    "self_weight.hold_s=0.002",
-    "self_weight.dt_s=0.002",
-    "time.steps_per_period=8",
-    "output.checkpoint_every=50",
-    "output.plots=false",
-    "output.paraview=false",
-]
+#: on the tiny joint: 8 steps a period, checkpoints every 50 steps, no ParaView files
+PIPELINE = ["time.steps_per_period=8", "output.checkpoint_every=50", "output.paraview=false"]
 
 
-def test_imperfection_reaches_the_mesh():
+def test_imperfection_reaches_the_mesh(tiny_case):
     amplitude, phase = 0.4e-3, 30.0
-    case = InstallationCase.from_dict(
-        read_case("scaled", TINY + [f"imperfections.tp.amplitude_m={amplitude}",
-                                    f"imperfections.tp.phase_deg={phase}"])
-    )
+    case = tiny_case(*PIPELINE, f"imperfections.tp.amplitude_m={amplitude}", f"imperfections.tp.phase_deg={phase}")
     model = set_up_joint_model(MPI.COMM_WORLD, case)
     joint, tp_z = case.joint, model.placed.tp_offset
     shift = tp_z - joint.tp_offset
@@ -67,11 +53,11 @@ def test_imperfection_reaches_the_mesh():
     assert model.settlement()["settlement_mm"] == pytest.approx(0.0, abs=1e-12)  # probes inside
 
 
-def test_dismount_pull_lifts_the_frictionless_tp(tmp_path_factory):
+def test_dismount_pull_lifts_the_frictionless_tp(shared_tmp):
     comm = MPI.COMM_WORLD
-    out = Path(comm.bcast(str(tmp_path_factory.mktemp("dismount")) if comm.rank == 0 else None))
+    out = shared_tmp
     plan = DismountPlan(pull_N=20e3, ramp_s=0.004, hold_s=0.016, n_frequencies=0)
-    data = read_case("scaled", TINY + ["vibration.modal_stage=false"])
+    data = read_case("tiny", PIPELINE + ["vibration.modal_stage=false"])
     dismount_case(data, plan)
     case = InstallationCase.from_dict(data)
     runner = Installation(comm, case, out, progress=False)

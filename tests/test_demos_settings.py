@@ -134,7 +134,7 @@ def test_ranked_stages_take_the_chosen_frequencies():
     assert (out[1].m, out[1].n, out[1].amplitude_N) == (3, 0, 3600.0)
 
 
-def test_imperfection_setting_gives_the_deviation_and_placement(tmp_path_factory):
+def test_imperfection_setting_gives_the_deviation_and_placement(shared_tmp):
     case = _case("imperfections.tp.amplitude_m=0.5e-3", "imperfections.tp.phase_deg=10.0")
     deviation = case.deviations()["tp"]
     theta = np.linspace(0, 2 * np.pi, 7)
@@ -143,7 +143,7 @@ def test_imperfection_setting_gives_the_deviation_and_placement(tmp_path_factory
     )
     # a processed map file beside the case: read through geometry.imperfections
     comm = MPI.COMM_WORLD
-    folder = comm.bcast(str(tmp_path_factory.mktemp("imp")) if comm.rank == 0 else None)
+    folder = shared_tmp
     path = f"{folder}/map.csv"
     if comm.rank == 0:
         rows = ["z_m,angle_deg,radial_deviation_m"]

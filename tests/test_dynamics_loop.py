@@ -38,10 +38,10 @@ class FlakyProblem:
         return StepResult(True, 2, [1.0, 1e-12])
 
 
-def test_step_is_cut_and_regrown(tmp_path):
+def test_step_is_cut_and_regrown(shared_tmp):
     problem = FlakyProblem(t_hard=0.35, max_ok=0.03)
     comm = MPI.COMM_WORLD
-    path = comm.bcast(tmp_path / "history.csv" if comm.rank == 0 else None)  # written by rank 0
+    path = shared_tmp / "history.csv"  # written by rank 0
     with CsvWriter(path, comm=comm) as writer:
         rows = run(problem, 1.0, 0.1, observers=[lambda p: {"settlement_mm": 10 * p.t}],
                    on_row=writer.write, progress=False)

@@ -226,8 +226,8 @@ def test_nodes_on_exact_circles(n_layers):
     assert COMM.allreduce(float(distance.max(initial=0.0)), op=MPI.MAX) < 1e-12
 
 
-def test_paraview_export(scaled, tmp_path_factory):
-    out = Path(COMM.bcast(str(tmp_path_factory.mktemp("xdmf")) if COMM.rank == 0 else None))
+def test_paraview_export(scaled, shared_tmp):
+    out = shared_tmp
     md = create_joint_mesh(COMM, scaled, MeshOptions(n_circumferential=24))
     path = write_paraview(md, out / "joint")
     COMM.barrier()

@@ -1,10 +1,10 @@
 """SPEC 5.5 (dismount) and 5.7 (fast sweep) on the coarse joint, branched from one settled state.
 
-The joint of the default installation run (solver.installation.cli.COARSE_FRICTIONAL: 8 elements around,
-0.25 m axially, 10 mm in the contact zone, P2, 16 steps per excitation period), settled by the
-10 kN self-weight ramped over 0.5 s in 10 ms steps (12 periods of the TP's 24 Hz axial
-oscillation on the wedge, so the ramp is slow for the TP; half the ramp of
-tests/test_install_scenarios.py to keep the test short), saved with solver.installation.checkpoint.
+The joint of the default installation run (cases/coarse.toml: 8 elements around, 0.25 m
+axially, 10 mm in the contact zone, P2, 16 steps per excitation period), settled by the 10 kN
+self-weight ramped over 0.5 s in 10 ms steps (12 periods of the TP's 24 Hz axial oscillation
+on the wedge, so the ramp is slow for the TP; half the ramp of tests/test_install_scenarios.py
+to keep the test short), saved with solver.installation.checkpoint.
 f_r is the best-ranked natural frequency of the settled joint below the case's 300 Hz limit
 (choose_frequencies, as the installation run: the TP's m = 1 pair, 142 Hz); A = 3.6 kN
 (SPEC 3 reference amplitude) at the TP's top edge (eccentric forcing).
@@ -48,12 +48,9 @@ import pytest
 from mpi4py import MPI
 
 from solver.installation import checkpoint
-from common.case import read_case
 from solver.contact import Status
-from solver.installation.cli import COARSE_FRICTIONAL
 from solver.installation.dismount import DismountPlan, pull_out_force
 from solver.dynamics.time_loop import run
-from solver.installation.case import InstallationCase
 from solver.installation.settings import StaticForceSettings
 from solver.installation.model import attach_vibration, set_up_joint_model, settled_modes
 from solver.installation.frequencies import choose_frequencies
@@ -62,16 +59,10 @@ from solver.modal.ranking import describe_modes, JointParts
 
 pytestmark = pytest.mark.mpi
 
-SCENARIO = COARSE_FRICTIONAL + ["self_weight.ramp_time_s=0.5", "self_weight.dt_s=0.01"]
 SEPARATION_FRACTION = 0.01  #: normal force below this fraction of the settled one: separated
 DISMOUNT_DURATION_S = 0.05  #: longest pull + vibration stage [s]
 SWEEP_DURATION_S = 0.05
 SWEEP_SPAN = (0.8, 1.2)  #: ramp from / to these multiples of f_r
-
-
-def _shared_dir(factory, name: str):
-    comm = MPI.COMM_WORLD
-    return comm.bcast(str(factory.mktemp(name)) if comm.rank == 0 else None, root=0)
 
 
 def _observe(model, rows: list):
@@ -120,9 +111,9 @@ def _vibrate(model, stage: Stage, f_max: float, chunks: int = 1, stop=None) -> n
 
 
 @pytest.fixture(scope="module")
-def settled(tmp_path_factory):
+def settled(coarse_case, shared_dir):
     comm = MPI.COMM_WORLD
-    case = InstallationCase.from_dict(read_case("scaled", SCENARIO))
+    case = coarse_case("self_weight.ramp_time_s=0.5", "self_weight.dt_s=0.01")
     model = set_up_joint_model(comm, case)
     sw = case.self_weight
     history = _advance(model, sw.duration_s, sw.dt_s)
@@ -133,7 +124,7 @@ def settled(tmp_path_factory):
                              m_max=min(12, (2 * case.mesh.n_circumferential - 1) // 2))
     chosen = choose_frequencies(records, case.vibration)
     f_r = next(e.frequency_Hz for e in sorted(chosen, key=lambda e: e.rank) if e.role == "modal")
-    folder = _shared_dir(tmp_path_factory, "settled")
+    folder = shared_dir("settled")
     checkpoint.save(folder, model.problem, {})
     _, settlement, normal, _ = history[-1]
     print(f"\nsettled: {settlement:.4f} mm, normal force {normal / 1e3:.2f} kN, "

@@ -6,7 +6,7 @@ import numpy as np
 import pytest
 from mpi4py import MPI
 
-from common.case import read_case
+from common.case import presets, read_case
 from solver.installation.case import InstallationCase
 
 pytestmark = pytest.mark.mpi
@@ -20,6 +20,9 @@ def test_presets_are_valid_installation_cases():
     case = _case()
     assert case.damping.model == "rayleigh" and case.self_weight.force_N == -10e3
     assert InstallationCase.from_dict(read_case("full_scale")).self_weight.force_N < 0
+    for name in presets():  # the imperfection demo's lead-in schedule is its own
+        schedule = ["schedule=[{duration_s = 0.01, frequency_hz = 68.0}]"] if "imperfections" in name else []
+        assert InstallationCase.from_dict(read_case(name, schedule)).self_weight.force_N < 0, name
 
 
 @pytest.mark.parametrize(
@@ -57,17 +60,16 @@ def test_bad_entries_name_the_problem(override, words):
         assert w in message, message
 
 
-def test_bad_schedule_stage(tmp_path_factory):
+def test_bad_schedule_stage(shared_tmp):
     comm = MPI.COMM_WORLD
-    path = None
+    path = shared_tmp / "bad_schedule.toml"
     if comm.rank == 0:
-        path = tmp_path_factory.mktemp("case") / "bad_schedule.toml"
         text = (
             read_case_text() + "\n[[schedule]]\nduration_s = 0.1\nfrequency_hz = 100.0\n"
             "[[schedule]]\nduration_s = -1.0\nfrequency_hz = 50.0\n"
         )
         path.write_text(text)
-    path = comm.bcast(path, root=0)
+    comm.barrier()
     with pytest.raises(ValueError, match=r"schedule stage 2.*duration_s"):
         InstallationCase.from_dict(read_case(path))
     with pytest.raises(ValueError, match=r"mode 40.*n_modes"):
@@ -82,11 +84,9 @@ def read_case_text() -> str:
     return resolve_case_path("scaled").read_text()
 
 
-def test_demo_rejects_bad_options_before_computing(demo_main, tmp_path_factory, capsys):
+def test_demo_rejects_bad_options_before_computing(demo_main, shared_tmp, capsys):
     comm = MPI.COMM_WORLD
-    out = comm.bcast(
-        str(tmp_path_factory.mktemp("out") / "run") if comm.rank == 0 else None, root=0
-    )
+    out = str(shared_tmp / "run")
     assert demo_main("install")(["--mu-s", "-1", "--output", out]) == 2
     assert demo_main("install")(["--case", "no_such_case", "--output", out]) == 2
     assert demo_main("install")(["--set", "friction.d_c", "--output", out]) == 2
@@ -115,13 +115,13 @@ def test_demo_rejects_bad_options_before_computing(demo_main, tmp_path_factory, 
     assert not (Path(out) / "history.csv").exists()  # nothing computed
 
 
-def test_resume_needs_the_same_rank_count(tmp_path_factory):
+def test_resume_needs_the_same_rank_count(shared_tmp):
     import json
 
     from solver.installation import checkpoint
 
     comm = MPI.COMM_WORLD
-    folder = comm.bcast(str(tmp_path_factory.mktemp("ckpt")) if comm.rank == 0 else None, root=0)
+    folder = shared_tmp
     if comm.rank == 0:
         manifest = {"ranks": comm.size + 1, "time_s": 0.1}
         (Path(folder) / checkpoint.MANIFEST).write_text(json.dumps(manifest))
@@ -130,7 +130,7 @@ def test_resume_needs_the_same_rank_count(tmp_path_factory):
         checkpoint.read_manifest(folder, comm)
 
 
-def test_resume_needs_a_complete_checkpoint(tmp_path_factory):
+def test_resume_needs_a_complete_checkpoint(shared_tmp):
     """A checkpoint without the contact memory (e.g. from before the pairing coordinates were
     saved) is refused with a clear error, not a KeyError."""
     import json
@@ -139,7 +139,7 @@ def test_resume_needs_a_complete_checkpoint(tmp_path_factory):
     from solver.installation import checkpoint
 
     comm = MPI.COMM_WORLD
-    folder = Path(comm.bcast(str(tmp_path_factory.mktemp("old_ckpt")) if comm.rank == 0 else None, root=0))
+    folder = shared_tmp
     if comm.rank == 0:
         (folder / checkpoint.MANIFEST).write_text(json.dumps({"ranks": comm.size, "time_s": 0.1}))
     comm.barrier()

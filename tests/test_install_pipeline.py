@@ -1,7 +1,7 @@
 """Installation pipeline on a tiny joint: outputs with units, positive self-weight settlement,
 and a killed-and-resumed run that ends with the results of an uninterrupted one (1e-8).
 
-The tiny configuration (12 around, 0.2 m axially, degree 2, a 12 ms self-weight ramp, two
+The tiny configuration (cases/tiny.toml: 12 around, 0.2 m axially, degree 2, a 12 ms self-weight ramp, two
 vibration stages of 2 ms) says nothing about convergence; it exercises every stage and the
 checkpoints (mid self-weight, after the modal stage, mid vibration). It uses frictionless
 contact: with mu_s = 0.5 Newton stalls on this coarse mesh when the TP stops after the fast
@@ -16,40 +16,14 @@ import numpy as np
 import pytest
 from mpi4py import MPI
 
-from common.case import read_case
-from solver.installation.cli import COARSE_FRICTIONAL
 from solver.installation.runner import Installation
-from solver.installation.case import InstallationCase
 
 pytestmark = pytest.mark.mpi
 
-TINY = [
-    "mesh.n_circumferential=12",
-    "mesh.axial_size=0.2",
-    "friction.mu_s=0.0",
-    "friction.mu_d=0.0",
-    "self_weight.ramp_time_s=0.012",
-    "self_weight.hold_s=0.002",
-    "self_weight.dt_s=0.002",
-    "vibration.n_modes=4",
-    "vibration.n_frequencies=1",
-    "vibration.lead_in_hz=[]",
-    "vibration.stage_duration_s=0.002",
-    "time.steps_per_period=4",
-    "output.checkpoint_every=3",
-    "output.plots=false",
-]
-
-
-def _shared_dir(factory, name: str) -> Path:
-    comm = MPI.COMM_WORLD
-    return Path(comm.bcast(str(factory.mktemp(name)) if comm.rank == 0 else None, root=0))
-
-
 @pytest.fixture(scope="module")
-def uninterrupted(tmp_path_factory):
-    out = _shared_dir(tmp_path_factory, "install_full")
-    case = InstallationCase.from_dict(read_case("scaled", TINY))
+def uninterrupted(tiny_case, shared_dir):
+    out = shared_dir("install_full")
+    case = tiny_case()
     runner = Installation(MPI.COMM_WORLD, case, out, progress=False)
     summary = runner.run()
     return runner, summary, out
@@ -106,10 +80,10 @@ def test_pipeline_settles_and_writes_outputs(uninterrupted):
         assert "total settlement" in (out / "summary.txt").read_text()
 
 
-def test_resume_equals_uninterrupted(uninterrupted, tmp_path_factory):
+def test_resume_equals_uninterrupted(uninterrupted, tiny_case, shared_dir):
     runner, summary, _ = uninterrupted
-    out = _shared_dir(tmp_path_factory, "install_resumed")
-    case = InstallationCase.from_dict(read_case("scaled", TINY))
+    out = shared_dir("install_resumed")
+    case = tiny_case()
     killed = Installation(MPI.COMM_WORLD, case, out, progress=False)
     assert (
         killed.run(stop_after_checkpoints=4) == {}
@@ -138,9 +112,9 @@ def test_resume_equals_uninterrupted(uninterrupted, tmp_path_factory):
     )
 
 
-#: the coarse frictional joint of the default run (mu 0.5/0.4, d_c = 100 s/m), a 0.1 s ramp in
+#: on the coarse frictional joint of the default run (mu 0.5/0.4, d_c = 100 s/m): a 0.1 s ramp in
 #: 10 ms steps (the TP lands at 0.06 s and slides), checkpoints every 4 steps
-FRICTIONAL = COARSE_FRICTIONAL + [
+FRICTIONAL = [
     "self_weight.ramp_time_s=0.1",
     "self_weight.dt_s=0.01",
     "vibration.n_modes=4",
@@ -153,17 +127,17 @@ FRICTIONAL = COARSE_FRICTIONAL + [
 ]
 
 
-def test_frictional_resume_repeats_the_uninterrupted_run(tmp_path_factory):
+def test_frictional_resume_repeats_the_uninterrupted_run(coarse_case, shared_dir):
     """Killed after the landing (second checkpoint, t = 0.08 s, the TP sliding on the MP) and
     resumed: the same displacement and settlement history as without the kill (1e-8), although
     stick-slip amplifies any round-off difference. Up to the kill the killed run is the same
     input computed a second time and must repeat the arithmetic (1e-13): with PETSc's BLAS-gemv
     Gram-Schmidt in GMRES two such runs differed by 4e-10 in the first step (common/backend.py)."""
-    case = InstallationCase.from_dict(read_case("scaled", FRICTIONAL))
+    case = coarse_case(*FRICTIONAL)
     comm = MPI.COMM_WORLD
-    full = Installation(comm, case, _shared_dir(tmp_path_factory, "friction_full"), progress=False)
+    full = Installation(comm, case, shared_dir("friction_full"), progress=False)
     summary = full.run()
-    out = _shared_dir(tmp_path_factory, "friction_resumed")
+    out = shared_dir("friction_resumed")
     killed = Installation(comm, case, out, progress=False)
     assert killed.run(stop_after_checkpoints=2) == {}
     resumed = Installation(comm, case, out, progress=False)

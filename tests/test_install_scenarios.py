@@ -1,9 +1,9 @@
 """SPEC 5 observations reproduced by the joint model: scenario tests on a coarse joint.
 
-The joint of the default installation run (solver.installation.cli.COARSE_FRICTIONAL): 8 elements
-around, 0.25 m axially, 10 mm axially in the contact zone around the TP's lower edge, P2,
-skew-symmetric Nitsche with gamma0 = 1, gap-limited Newton steps, generalised-alpha
-rho_inf = 0; self-weight 10 kN ramped over 1 s
+The joint of the default installation run (cases/scenario.toml: the coarse joint of
+cases/coarse.toml, 8 elements around, 0.25 m axially, 10 mm axially in the contact zone around
+the TP's lower edge, P2, skew-symmetric Nitsche with gamma0 = 1, gap-limited Newton steps,
+generalised-alpha rho_inf = 0); self-weight 10 kN ramped over 1 s
 (half the SPEC 3 ramp time, to keep the test short) in 10 ms steps. The step must resolve
 the TP's axial oscillation on the wedge (about 24 Hz here: hoop stiffness of the contact
 band against the TP's mass): with 20 ms steps generalised-alpha (rho_inf = 0) damps it out and
@@ -30,7 +30,6 @@ import pytest
 from mpi4py import MPI
 
 from common.case import read_case
-from solver.installation.cli import COARSE_FRICTIONAL
 from solver.dynamics.time_loop import run
 from solver.installation.case import InstallationCase
 from solver.installation.model import set_up_joint_model, settled_modes
@@ -38,7 +37,6 @@ from solver.post.report import stick_slip_events
 
 pytestmark = pytest.mark.mpi
 
-SCENARIO = COARSE_FRICTIONAL + ["self_weight.ramp_time_s=1.0", "self_weight.dt_s=0.01"]
 LOW_FRICTION = ["friction.mu_s=0.0625", "friction.mu_d=0.05"]
 N_MODES = 6
 
@@ -47,7 +45,7 @@ def _self_weight(overrides: list[str], modes_at: tuple[float, ...] = (), end: fl
     """Run the self-weight ramp up to ``end`` (fraction of the ramp); return the history
     (time [s], settlement [mm]) and the settled joint's frequencies [Hz] at the times
     ``modes_at`` (fractions of the ramp)."""
-    case = InstallationCase.from_dict(read_case("scaled", SCENARIO + overrides))
+    case = InstallationCase.from_dict(read_case("scenario", overrides))
     model = set_up_joint_model(MPI.COMM_WORLD, case)
     sw = case.self_weight
     history = []

@@ -1,9 +1,9 @@
 """SPEC 5.2/5.3/5.6 vibration scenarios on the coarse joint: frequency- and amplitude-driven
 settlement, and the friction decay d_c.
 
-The joint and self-weight stage of tests/test_install_scenarios.py (solver.installation.cli.
-COARSE_FRICTIONAL: 8 around, 0.25 m, 10 mm in the contact zone, P2, generalised-alpha
-rho_inf = 0, 16 steps per period; 10 kN ramped over 1 s in 10 ms steps), then, as
+The joint and self-weight stage of tests/test_install_scenarios.py (cases/scenario.toml: 8
+around, 0.25 m, 10 mm in the contact zone, P2, generalised-alpha rho_inf = 0, 16 steps per
+period; 10 kN ramped over 1 s in 10 ms steps), then, as
 benchmarks/scenarios.py (whose functions it uses): the modal stage chooses the best-ranked
 natural frequency f_r (the TP's m = 1 pair, 141.9 Hz) and the non-modal control f_c
 (71.0 Hz); a lead-in of LEAD_IN at f_c with the amplitude A = 3.6 kN brings the joint to its
@@ -85,7 +85,6 @@ from benchmarks.scenarios import (SettledJoint, gain, harmonic_stage, late_gain,
                                   stabilised)
 from solver.installation import checkpoint
 from solver.contact import NitscheContact, Status
-from solver.installation.cli import COARSE_FRICTIONAL
 
 pytestmark = [
     pytest.mark.mpi,
@@ -96,7 +95,6 @@ pytestmark = [
     ),
 ]
 
-SCENARIO = COARSE_FRICTIONAL + ["self_weight.ramp_time_s=1.0", "self_weight.dt_s=0.01"]
 AMPLITUDE = 3600.0  #: force amplitude A [N] (SPEC 3: the eccentric motors at 100 Hz)
 LEAD_IN = 0.1  #: lead-in at (f_c, A) [s]
 BRANCH = 0.05  #: each branch [s]
@@ -142,10 +140,10 @@ class Scenario(NamedTuple):
 
 
 def run_scenario(folder: str, overrides: list[str], names: str) -> Scenario:
-    """Self-weight and modal stage of SCENARIO + ``overrides``, the lead-in at f_c, then the
+    """Self-weight and modal stage of cases/scenario.toml with ``overrides``, the lead-in at f_c, then the
     branches ``names`` (of a: f_r at A, b: f_c at A, c: f_c at 2 A) from its end (collective)."""
     comm = MPI.COMM_WORLD
-    joint = settle(comm, SCENARIO + overrides)
+    joint = settle(comm, overrides, "scenario")
     model = joint.model
     settled = model.settlement(model.problem)["settlement_mm"]
     slip = {"lead-in": InterfaceSlip(model.contact)}
@@ -170,24 +168,16 @@ def run_scenario(folder: str, overrides: list[str], names: str) -> Scenario:
     return Scenario(joint, settled, lead, branches, slip)
 
 
-def shared_folder(tmp_path_factory, name: str) -> str:
-    """A fresh temporary folder, the same on every rank."""
-    comm = MPI.COMM_WORLD
-    folder = str(tmp_path_factory.mktemp(name)) if comm.rank == 0 else None
-    return comm.bcast(folder, root=0)
-
-
 @pytest.fixture(scope="module")
-def scenario(tmp_path_factory) -> Scenario:
+def scenario(shared_dir) -> Scenario:
     """The case's friction (d_c = 100 s/m): lead-in and the branches a, b, c."""
-    return run_scenario(shared_folder(tmp_path_factory, "vibration"), [], "abc")
+    return run_scenario(shared_dir("vibration"), [], "abc")
 
 
 @pytest.fixture(scope="module")
-def slow_decay(tmp_path_factory) -> Scenario:
+def slow_decay(shared_dir) -> Scenario:
     """d_c = SLOW_DECAY, all else equal: lead-in and the branches a, b."""
-    return run_scenario(shared_folder(tmp_path_factory, "slow_decay"),
-                        [f"friction.d_c={SLOW_DECAY}"], "ab")
+    return run_scenario(shared_dir("slow_decay"), [f"friction.d_c={SLOW_DECAY}"], "ab")
 
 
 def selectivity(s: Scenario) -> float:

@@ -1,7 +1,6 @@
 """Coupling through the contact interface, and the joint's modal outputs."""
 
 import csv
-from pathlib import Path
 
 import gmsh
 import numpy as np
@@ -133,12 +132,9 @@ def test_nitsche_parameter_barely_matters(stack):
     np.testing.assert_allclose(f[0], f[1], rtol=2e-3)
 
 
-QUICK = ["modal.n_circumferential=24", "modal.degree=2", "mesh.axial_size=0.2", "modal.n_modes=6"]
-
-
 @pytest.fixture(scope="module")
 def quick_joint():
-    case = JointCase.from_dict(read_case("scaled", QUICK))
+    case = JointCase.from_dict(read_case("modal_quick", ["modal.n_modes=6"]))
     return case, joint_modes(MPI.COMM_WORLD, case)
 
 
@@ -148,12 +144,10 @@ def test_joint_partition_independent(quick_joint):
     np.testing.assert_allclose(modes.result.frequencies_hz, serial, rtol=1e-8)
 
 
-def test_joint_outputs(quick_joint, tmp_path_factory):
+def test_joint_outputs(quick_joint, shared_tmp):
     case, modes = quick_joint
     comm = MPI.COMM_WORLD
-    folder = Path(
-        comm.bcast(str(tmp_path_factory.mktemp("modal")) if comm.rank == 0 else None, root=0)
-    )
+    folder = shared_tmp
     parts = JointParts.for_joint(modes.result.V, modes.mesh_data, case.joint)
     records = describe_modes(modes.result, case.material, parts)
     table = format_table(records)

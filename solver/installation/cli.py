@@ -1,102 +1,136 @@
-"""Command line shared by the installation-type demos (sweep, dismount, imperfections, parameter
-study): a case file plus ``--set table.key=value`` overrides, named shorthands for the common
-keys, ``--quick`` and ``--output``; bad options give ``error: ...`` and exit code 2 before any
-computation, a time loop that gives up gives exit code 1 (as ``demos/install.py``).
+"""The command line shared by the demos.
 
-Override order (later wins): the demo's defaults, ``--quick``, the named options, ``--set``.
+Every demo reads a case: ``--case NAME`` (a preset in ``cases/`` or a TOML file; each demo has
+its default case), with ``--set table.key=value`` overrides and, for the installation-type
+demos, named shorthands for common keys (``--mu-s 0.3`` is ``--set friction.mu_s=0.3``).
+``--quick`` is ``--case`` of the demo's quick preset (a smoke run, what CTest runs); giving
+another ``--case`` with it is an error. Later wins: the case file (with the files it extends),
+the named options, ``--set``. ``--output`` is the output folder.
+
+Exit codes: bad options, a case that does not check, or an output folder that cannot be
+created or written give ``error: ...`` on stderr and 2 before any computation; a time loop
+that gives up gives 1 (results up to there are in the output folder).
 """
 
 from __future__ import annotations
 
 import argparse
 import sys
-from collections.abc import Callable
+from collections.abc import Callable, Iterable
 from pathlib import Path
 from typing import Any
 
 from mpi4py import MPI
 
-from common.case import read_case
-from solver.installation.runner import Installation
+from common.case import read_case, resolve_case_path
 from solver.installation.case import InstallationCase
+from solver.installation.runner import Installation
 
-#: the very coarse joint (8 around, 0.25 m) with 10 mm axial elements in the contact zone
-#: (the contact band is about 20 x the settlement high) and the contact settings with which
-#: the frictional stages converge on it (docs/contact.md, docs/install.md: the default run of
-#: demos/install.py)
-COARSE_FRICTIONAL = [
-    "mesh.n_circumferential=8",
-    "mesh.axial_size=0.25",
-    "mesh.contact_axial_size=0.01",
-    "contact.theta=-1",
-    "contact.gamma0=1.0",
-    "contact.max_gap_change=1e-5",
-    "contact.max_backtracks=4",
-    "time.rho_inf=0.0",
-    "self_weight.hold_s=0.0",
-    "time.steps_per_period=16",
-]
-
-#: --quick: the tiny joint of the pipeline tests (12 around, 0.2 m) with the landing settings
-#: of COARSE_FRICTIONAL (skew-symmetric Nitsche, gamma0 = 1, gap-limited Newton steps) and the
-#: case's friction, a 12 ms self-weight ramp (the TP is still sliding at its end), short stages,
-#: no ParaView files; a smoke run of the demo, not physics
-QUICK = [
-    "mesh.n_circumferential=12",
-    "mesh.axial_size=0.2",
-    "mesh.contact_axial_size=0.0",
-    "contact.theta=-1",
-    "contact.gamma0=1.0",
-    "contact.max_gap_change=1e-5",
-    "self_weight.ramp_time_s=0.012",
-    "self_weight.hold_s=0.002",
-    "self_weight.dt_s=0.002",
-    "vibration.n_modes=4",
-    "vibration.n_frequencies=1",
-    "vibration.lead_in_hz=[]",
-    "time.steps_per_period=4",
-    "output.checkpoint_every=50",
-    "output.paraview=false",
-]
-
-#: named options -> case keys
+#: named options -> (case key, type, help)
 NAMED = {
     "mesh_size": ("mesh.axial_size", float, "axial element size [m]"),
     "n_circumferential": ("mesh.n_circumferential", int, "elements around (multiple of 4)"),
+    "degree": ("contact.degree", int, "Lagrange degree of the displacement"),
     "mu_s": ("friction.mu_s", float, "static friction coefficient"),
     "mu_d": ("friction.mu_d", float, "dynamic friction coefficient"),
     "d_c": ("friction.d_c", float, "friction decay coefficient [s/m]"),
     "damping": ("damping.model", str, "damping model: rayleigh | modal"),
+    "zeta": ("damping.zeta", float, "damping ratio"),
     "forcing": ("vibration.forcing", str, "vibration force at: eccentric | face | shaker"),
     "direction": ("vibration.direction", str, "vibration force direction: axial | lateral | both"),
+    "lateral_fraction": ("vibration.lateral_fraction", float, "lateral part with --direction both"),
+    "amplitude": ("vibration.amplitude_N", float, "force amplitude of the modal/control stages [N]"),
+    "shaker_height": ("vibration.shaker_height_m", float, "shaker: height above the TP lower end [m]"),
+    "angle": ("vibration.angle_deg", float, "circumferential position of the point force [deg]"),
+    "stage_duration": ("vibration.stage_duration_s", float, "duration of each vibration stage [s]"),
+    "n_frequencies": ("vibration.n_frequencies", int, "number of ranked natural frequencies excited"),
     "steps_per_period": ("time.steps_per_period", int, "time steps per excitation period"),
 }
+#: the named options of the installation-type demos that add options of their own
+INSTALLATION_OPTIONS = ("mesh_size", "n_circumferential", "mu_s", "mu_d", "d_c", "damping", "forcing",
+                        "direction", "steps_per_period")
 
 
-def parser(description: str, output: str) -> argparse.ArgumentParser:
-    """The common options; a demo adds its own."""
+def case_parser(description: str, output: str, default_case: str, quick_case: str) -> argparse.ArgumentParser:
+    """``--case``, ``--set``, ``--quick`` and ``--output``: the options of every demo."""
     p = argparse.ArgumentParser(description=description)
-    p.add_argument("--case", default="scaled", help="case file or preset name in cases/")
+    p.set_defaults(default_case=default_case, quick_case=quick_case, named=())
+    p.add_argument("--case", help=f"case: a preset name in cases/ or a TOML file (default: {default_case})")
     p.add_argument("--set", action="append", default=[], metavar="TABLE.KEY=VALUE",
                    help="override a case entry, e.g. friction.mu_s=0.3 (repeatable)")
-    for name, (_, kind, text) in NAMED.items():
-        p.add_argument("--" + name.replace("_", "-"), type=kind, help=text)
     p.add_argument("--quick", action="store_true",
-                   help="smoke run on the tiny joint with very short stages "
-                   "(what CTest runs; not physics)")
-    p.add_argument("--output", default=output, help="output folder")
+                   help=f"smoke run: --case {quick_case} (what CTest runs; not physics)")
+    p.add_argument("--output", default=output, help=f"output folder (default: {output})")
+    return p
+
+
+def parser(description: str, output: str, default_case: str, quick_case: str,
+           named: Iterable[str] = INSTALLATION_OPTIONS) -> argparse.ArgumentParser:
+    """The options of the installation-type demos: ``case_parser``'s, the ``named`` shorthands
+    and ``--no-progress``; a demo adds its own."""
+    p = case_parser(description, output, default_case, quick_case)
+    p.set_defaults(named=tuple(named))
+    for name in named:
+        _, kind, text = NAMED[name]
+        p.add_argument("--" + name.replace("_", "-"), type=kind, help=text)
     p.add_argument("--no-progress", action="store_true", help="no progress bar")
     return p
 
 
-def overrides(args: argparse.Namespace, defaults: list[str], quick: list[str]) -> list[str]:
-    """Case overrides: defaults, then --quick's, then the named options, then --set."""
-    items = list(defaults) + (list(quick) if args.quick else [])
-    for name, (key, _, _) in NAMED.items():
-        value = getattr(args, name)
+def case_name(args: argparse.Namespace) -> str:
+    """The case of the command line: ``--case``, the quick preset with ``--quick``, else the
+    demo's default (ValueError for ``--quick`` with another ``--case``)."""
+    if not args.quick:
+        return args.case or args.default_case
+    if args.case is not None and resolve_case_path(args.case).resolve() != resolve_case_path(args.quick_case).resolve():
+        raise ValueError(f"--quick is --case {args.quick_case}; it cannot be combined with --case {args.case}")
+    return args.quick_case
+
+
+def overrides(args: argparse.Namespace, before: Iterable[str] = (), after: Iterable[str] = ()) -> list[str]:
+    """Case overrides: a demo's ``before`` the named options and --set (which win over them), then
+    the named options, --set, and a demo's ``after`` them (which win over --set)."""
+    items = list(before)
+    for name in args.named:
+        value = vars(args)[name]
         if value is not None:
+            key = NAMED[name][0]
             items.append(f"{key}={value!r}" if isinstance(value, str) else f"{key}={value}")
-    return items + list(args.set)
+    return items + list(args.set) + list(after)
+
+
+def read(args: argparse.Namespace, before: Iterable[str] = (), after: Iterable[str] = ()) -> dict[str, Any]:
+    """The case dict of the command line (ValueError on any problem)."""
+    return read_case(case_name(args), overrides(args, before, after))
+
+
+def load_case(args: argparse.Namespace, before: Iterable[str] = (), after: Iterable[str] = (),
+              edit: Callable[[dict[str, Any]], None] | None = None) -> InstallationCase:
+    """The checked installation case (ValueError on any problem); ``edit`` may change the case
+    dict first (e.g. put in a generated [[schedule]])."""
+    data = read(args, before, after)
+    if edit is not None:
+        edit(data)
+    return InstallationCase.from_dict(data)
+
+
+def prepare_output(comm: MPI.Comm, folder: str | Path) -> Path:
+    """Create the output folder and check that it takes files (collective); ValueError naming the
+    folder if not."""
+    folder = Path(folder)
+    problem = None
+    if comm.rank == 0:
+        probe = folder / ".write-test"
+        try:
+            folder.mkdir(parents=True, exist_ok=True)
+            probe.write_text("")
+            probe.unlink()
+        except OSError as e:
+            problem = f"output folder {str(folder)!r} cannot be created or written: {e.strerror or e}"
+    problem = comm.bcast(problem, root=0)
+    if problem is not None:
+        raise ValueError(problem)
+    return folder
 
 
 def fail(comm: MPI.Comm, message: str) -> int:
@@ -104,19 +138,6 @@ def fail(comm: MPI.Comm, message: str) -> int:
     if comm.rank == 0:
         print(f"error: {message}", file=sys.stderr, flush=True)
     return 2
-
-
-def load_case(
-    args: argparse.Namespace,
-    items: list[str],
-    edit: Callable[[dict[str, Any]], None] | None = None,
-) -> InstallationCase:
-    """The checked case (ValueError on any problem); ``edit`` may change the case dict first
-    (e.g. put in a generated [[schedule]])."""
-    data = read_case(args.case, items)
-    if edit is not None:
-        edit(data)
-    return InstallationCase.from_dict(data)
 
 
 def run(comm: MPI.Comm, case: InstallationCase, output: str | Path, progress: bool = True,
