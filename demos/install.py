@@ -4,7 +4,8 @@ Stages: self-weight (10 kN ramped over 2 s, stick-slip settlement), modal analys
 settled joint with the contact tangent and a ranked choice of excitation frequencies,
 vibration at those frequencies plus a non-modal control, and a report. Outputs go to
 --output as the run goes (case.json, history.csv, stages.csv, modes.csv, frequencies.csv,
-plots, ParaView files, summary.txt); a killed run continues with --resume.
+plots, ParaView files, summary.txt); a killed run continues with --resume, which refuses a
+case that would compute something else (exit code 2, naming the keys that differ).
 
 The default case is cases/install.toml (the coarse frictional joint with 0.05 s stages);
 --quick is --case install_quick (a smoke run), --full is --case scaled (the case file's
@@ -37,7 +38,7 @@ def parse(argv: list[str] | None) -> argparse.Namespace:
                    help=f"--case {FULL_CASE}: the case file's discretisation and stage durations "
                    "(without the default run's cost reductions)")
     p.add_argument("--resume", action="store_true",
-                   help="continue from the last checkpoint in --output")
+                   help="continue from the last checkpoint in --output (the same case only)")
     return p.parse_args(argv)
 
 
@@ -56,7 +57,7 @@ def main(argv: list[str] | None = None) -> int:
     runner = Installation(comm, case, args.output, progress=not args.no_progress)
     try:
         runner.run(resume=args.resume)
-    except ValueError as e:  # --resume without a (matching) checkpoint
+    except ValueError as e:  # --resume without a checkpoint, or with one of another case
         return cli.fail(comm, str(e))
     except RuntimeError as e:  # the time loop gave up (Newton failed at the minimum step)
         if comm.rank == 0:

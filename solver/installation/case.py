@@ -3,6 +3,8 @@ anything is computed (:meth:`InstallationCase.from_dict`)."""
 
 from __future__ import annotations
 
+import hashlib
+import json
 from dataclasses import asdict, dataclass, field
 from pathlib import Path
 from typing import Any
@@ -136,12 +138,64 @@ class InstallationCase:
         }
 
     def describe(self) -> dict[str, Any]:
-        """Plain-data summary of the settings (written to the output folder)."""
-        out = {name: asdict(getattr(self, name)) for name in ("mesh", "friction", *SECTIONS)}
-        out["material"] = asdict(self.material)
-        out["imperfections"] = {k: asdict(v) for k, v in self.imperfections.items()}
-        out["source"] = self.source
+        """The resolved case as plain data: every table with its defaults filled in, the
+        [[schedule]] stages and the case file (written to the output folder as case.json)."""
+        out = {
+            "source": self.source,
+            "geometry": asdict(self.joint),
+            "material": asdict(self.material),
+            "mesh": asdict(self.mesh),
+            "friction": asdict(self.friction),
+            **{name: asdict(getattr(self, name)) for name in SECTIONS},
+            "schedule": None if self.schedule is None else [asdict(s) for s in self.schedule.stages],
+            "imperfections": {k: asdict(v) for k, v in self.imperfections.items()},
+        }
+        return json.loads(json.dumps(out))
+
+    def fingerprint(self) -> dict[str, Any]:
+        """Dotted key -> value of everything that decides the computed result: the resolved case
+        without the case file's name, the output-only keys (``OUTPUT_ONLY``) and the imperfection
+        files' names, whose content counts instead (``imperfections.<part>.file_sha256``)."""
+        flat = flatten({k: v for k, v in self.describe().items() if k != "source"})
+        for key in OUTPUT_ONLY:
+            flat.pop(key)
+        case_dir = Path(self.source).parent
+        for name, setting in self.imperfections.items():
+            path = setting.path(case_dir)
+            if path is not None:
+                flat.pop(f"imperfections.{name}.file")
+                flat[f"imperfections.{name}.file_sha256"] = hashlib.sha256(path.read_bytes()).hexdigest()
+        return flat
+
+
+#: keys that change only what a run writes, not what it computes: a resumed run may differ in them
+OUTPUT_ONLY = ("output.paraview", "output.plots")
+
+
+def flatten(data: Any, prefix: str = "") -> dict[str, Any]:
+    """Nested tables and lists of tables -> {dotted key: value} (list items as ``key[k]``, k from 1)."""
+    if isinstance(data, dict):
+        out = {}
+        for key, value in data.items():
+            out.update(flatten(value, f"{prefix}.{key}" if prefix else str(key)))
         return out
+    if isinstance(data, list) and data and all(isinstance(item, dict) for item in data):
+        out = {}
+        for k, item in enumerate(data, start=1):
+            out.update(flatten(item, f"{prefix}[{k}]"))
+        return out
+    return {prefix: data}
+
+
+def case_differences(old: dict[str, Any], new: dict[str, Any]) -> list[str]:
+    """``key: old -> new`` for every dotted key whose value differs between two fingerprints
+    (``-`` where one of them lacks the key)."""
+    lines = []
+    for key in sorted(set(old) | set(new)):
+        a, b = old.get(key, "-"), new.get(key, "-")
+        if a != b:
+            lines.append(f"{key}: {a} -> {b}")
+    return lines
 
 
 def _imperfections(case: dict[str, Any], joint: JointGeometry) -> dict[str, ImperfectionSettings]:

@@ -42,7 +42,7 @@ from solver.dynamics.loads import Schedule, TPLoading
 from solver.dynamics.schemes import scheme_from_name
 from solver.dynamics.time_loop import run
 from solver.installation import checkpoint
-from solver.installation.case import InstallationCase
+from solver.installation.case import InstallationCase, case_differences
 from solver.installation.frequencies import Excitation, choose_frequencies, schedule_excitations
 from solver.installation.model import JointModel, attach_vibration, set_up_joint_model, settled_modes
 from solver.installation.observers import ContactZoneGuard
@@ -92,8 +92,11 @@ class Installation:
     """The staged installation run of one case, writing its outputs to ``output`` as it goes.
 
     ``run(resume=False, stop_after_checkpoints=None)``: the whole pipeline; with ``resume``
-    it continues from the checkpoint in ``output/checkpoint``; ``stop_after_checkpoints``
-    ends the run early after that many checkpoints (used to test resuming).
+    it continues from the checkpoint in ``output/checkpoint``, which records the fingerprint of
+    its case (``InstallationCase.fingerprint``): a case that would compute something else is
+    refused before anything is computed (ValueError naming the keys that differ; output-only
+    keys may differ). ``stop_after_checkpoints`` ends the run early after that many
+    checkpoints (used to test resuming).
     """
 
     def __init__(
@@ -117,6 +120,7 @@ class Installation:
         self.natural_frequencies: list[float] = []
         self._checkpoints = 0
         self._stop_after: int | None = None
+        self._fingerprint: dict[str, Any] = {}
 
     # paths
     @property
@@ -125,6 +129,7 @@ class Installation:
 
     def _record(self, next_stage: int, chunk: int) -> dict[str, Any]:
         return {
+            "case": self._fingerprint,
             "next_stage": next_stage,
             "next_chunk": chunk,
             "history": self.history,
@@ -310,6 +315,19 @@ class Installation:
             return
         attach_vibration(model, self._schedule(plans[0].start_s))
 
+    def _check_same_case(self, manifest: dict[str, Any]) -> None:
+        """ValueError naming the keys in which this run's case differs from the checkpoint's
+        (``InstallationCase.fingerprint``): a resumed run must compute what the killed one did."""
+        if "case" not in manifest:
+            raise ValueError(f"checkpoint {self.checkpoint_dir} does not record its case: rerun without --resume")
+        differences = case_differences(manifest["case"], self._fingerprint)
+        if differences:
+            raise ValueError(
+                f"the case differs from the one of the checkpoint in {self.checkpoint_dir} "
+                f"(checkpoint -> now): {', '.join(differences)}; resume with the case of the run "
+                "that wrote it, or rerun without --resume"
+            )
+
     def run(
         self, resume: bool = False, stop_after_checkpoints: int | None = None
     ) -> dict[str, Any]:
@@ -317,6 +335,9 @@ class Installation:
         self._stop_after = stop_after_checkpoints
         case, comm = self.case, self.comm
         manifest = checkpoint.read_manifest(self.checkpoint_dir, comm) if resume else None
+        self._fingerprint = case.fingerprint()
+        if manifest is not None:
+            self._check_same_case(manifest)
         if comm.rank == 0:
             self.output.mkdir(parents=True, exist_ok=True)
             (self.output / "case.json").write_text(

@@ -298,11 +298,18 @@ class ImperfectionSettings:
         if not (isinstance(self.waves, int) and self.waves >= 1):
             raise ValueError(f"waves must be an integer >= 1, got {self.waves!r}")
 
+    def path(self, case_dir: Path) -> Path | None:
+        """The map or scan file (from the working directory, else beside the case file in
+        ``case_dir``); None for an ovality."""
+        if not self.file:
+            return None
+        path = Path(self.file)
+        if not path.is_file() and not path.is_absolute() and (case_dir / path).is_file():
+            path = case_dir / path
+        return path
+
     def deviation(self, part, case_dir: Path) -> RadialDeviation:
         """The radial deviation function of ``part`` (reads and checks the file)."""
         if not self.file:
             return ovality(self.amplitude_m, self.waves, self.phase_deg)
-        path = Path(self.file)
-        if not path.is_file() and not path.is_absolute() and (case_dir / path).is_file():
-            path = case_dir / path
-        return read_imperfection(path, part)
+        return read_imperfection(self.path(case_dir), part)
