@@ -34,39 +34,25 @@ def shared_tmp(shared_dir) -> Path:
     return shared_dir("tmp")
 
 
-def _case_factory(name: str):
-    def make(*overrides: str):
+def _case_fixture(name: str, what: str):
+    """A session fixture ``<name>_case(*overrides)``: the installation case cases/<name>.toml
+    with ``table.key=value`` overrides."""
+
+    @pytest.fixture(scope="session")
+    def fixture():
         from common.case import read_case
         from solver.installation.case import InstallationCase
 
-        return InstallationCase.from_dict(read_case(name, list(overrides)))
+        return lambda *overrides: InstallationCase.from_dict(read_case(name, list(overrides)))
 
-    make.__doc__ = f"The installation case cases/{name}.toml with ``table.key=value`` overrides."
-    return make
-
-
-@pytest.fixture(scope="session")
-def tiny_case():
-    """``tiny_case(*overrides)``: the tests' tiny frictionless joint (cases/tiny.toml)."""
-    return _case_factory("tiny")
+    fixture.__doc__ = f"``{name}_case(*overrides)``: {what} (cases/{name}.toml)."
+    return fixture
 
 
-@pytest.fixture(scope="session")
-def quick_case():
-    """``quick_case(*overrides)``: the demos' smoke-run joint (cases/quick.toml)."""
-    return _case_factory("quick")
-
-
-@pytest.fixture(scope="session")
-def coarse_case():
-    """``coarse_case(*overrides)``: the coarse frictional joint (cases/coarse.toml)."""
-    return _case_factory("coarse")
-
-
-@pytest.fixture(scope="session")
-def scenario_case():
-    """``scenario_case(*overrides)``: the coarse joint under a 1 s ramp (cases/scenario.toml)."""
-    return _case_factory("scenario")
+tiny_case = _case_fixture("tiny", "the tests' tiny frictionless joint")
+quick_case = _case_fixture("quick", "the demos' smoke-run joint")
+coarse_case = _case_fixture("coarse", "the coarse frictional joint")
+scenario_case = _case_fixture("scenario", "the coarse joint under a 1 s self-weight ramp")
 
 
 @pytest.fixture(scope="session")

@@ -31,6 +31,12 @@ PAIR_TOLERANCE = 0.02  #: relative frequency difference within which two modes a
 MIN_FREQUENCY_HZ = 1.0  #: modes below this are not excited [Hz]
 
 
+def _modal(record: ModeRecord, settings: VibrationSettings, reason: str) -> Excitation:
+    """The excitation of a chosen mode at the modal stages' amplitude."""
+    return Excitation(record.frequency_Hz, settings.amplitude_N, "modal", record.mode, record.m,
+                      record.n, record.rank, reason)
+
+
 def choose_frequencies(records: list[ModeRecord], settings: VibrationSettings) -> list[Excitation]:
     """Excitation stages from the ranking of the settled joint's modes.
 
@@ -63,17 +69,8 @@ def choose_frequencies(records: list[ModeRecord], settings: VibrationSettings) -
         if same_pair(r):
             continue
         chosen.append(
-            Excitation(
-                r.frequency_Hz,
-                settings.amplitude_N,
-                "modal",
-                r.mode,
-                r.m,
-                r.n,
-                r.rank,
-                f"rank {r.rank} of {len({x.rank for x in records})}: resonant interface slip "
-                f"{max(r.resonant_slip_axial_um, r.resonant_slip_lateral_um):.3g} um",
-            )
+            _modal(r, settings, f"rank {r.rank} of {len({x.rank for x in records})}: resonant "
+                   f"interface slip {max(r.resonant_slip_axial_um, r.resonant_slip_lateral_um):.3g} um")
         )
     m2n1 = [r for r in modes if (r.m, r.n) == (2, 1)]
     if settings.m2n1_mode and m2n1 and all((c.m, c.n) != (2, 1) for c in chosen):
@@ -82,16 +79,8 @@ def choose_frequencies(records: list[ModeRecord], settings: VibrationSettings) -
             above = (f", above the ranked choice's {settings.max_frequency_hz:g} Hz"
                      if r.frequency_Hz > settings.max_frequency_hz else "")
             chosen.append(
-                Excitation(
-                    r.frequency_Hz,
-                    settings.amplitude_N,
-                    "modal",
-                    r.mode,
-                    r.m,
-                    r.n,
-                    r.rank,
-                    f"lowest m = 2, n = 1 mode (SPEC 5.4: most effective in the experiments{above})",
-                )
+                _modal(r, settings, f"lowest m = 2, n = 1 mode (SPEC 5.4: most effective in the "
+                       f"experiments{above})")
             )
     chosen.sort(key=lambda e: e.frequency_Hz)
     if settings.control and chosen:
