@@ -29,15 +29,14 @@ from petsc4py import PETSc
 import dolfinx
 import dolfinx.fem.petsc
 
+from common.case import read_case
 from geometry import tags
 from geometry.mesh import create_joint_mesh
 from geometry.parameters import MeshOptions, geometry_from_case
-from common.case import read_case
-from solver.contact import NitscheContact
-from solver.elasticity import epsilon, sigma
-from solver.contact import FrictionLaw
-from solver.modal.interface import band_status
+from solver.contact import FrictionLaw, NitscheContact
 from solver.dynamics.newton import ContactNewtonSolver
+from solver.elasticity import epsilon, sigma
+from solver.modal.interface import band_status
 
 
 def timed(comm, f):

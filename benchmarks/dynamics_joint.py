@@ -37,20 +37,19 @@ from mpi4py import MPI
 
 from dolfinx import fem
 
+from common.case import resolve_case_path
 from geometry import tags
 from geometry.mesh import create_joint_mesh
 from geometry.parameters import MeshOptions, load_geometry
-from solver.installation import checkpoint
-from common.case import resolve_case_path
-from solver.contact import NitscheContact
+from solver.contact import FrictionLaw, NitscheContact
 from solver.dynamics.damping import RayleighDamping
-from solver.installation.observers import ContactZoneGuard, Settlement
-from solver.dynamics.elastodynamics import assemble_structure, Elastodynamics
-from solver.dynamics.time_loop import run
-from solver.contact import FrictionLaw
+from solver.dynamics.elastodynamics import Elastodynamics, assemble_structure
 from solver.dynamics.loads import RampedAxialForce, Schedule, Stage, TopFaceLoad, TPLoading
-from solver.modal.eigen import clamp
 from solver.dynamics.schemes import GeneralisedAlpha
+from solver.dynamics.time_loop import run
+from solver.installation import checkpoint
+from solver.installation.observers import ContactZoneGuard, Settlement
+from solver.modal.eigen import clamp
 from solver.post.csv import CsvWriter
 
 from benchmarks.phase_timer import PhaseTimer

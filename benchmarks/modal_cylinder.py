@@ -17,13 +17,13 @@ from common import backend  # noqa: F401  (before dolfinx)
 from dolfinx import fem
 from mpi4py import MPI
 
+from common.material import Material
 from geometry import tags
 from geometry.mesh import create_tube_mesh
 from geometry.parameters import ConePart, MeshOptions
-from solver.reduced.cylinder_shell import cylinder_frequencies
-from common.material import Material
-from solver.modal.eigen import EigenOptions, clamp, modal_analysis
 from solver.modal.classify import classify
+from solver.modal.eigen import EigenOptions, clamp, modal_analysis
+from solver.reduced.cylinder_shell import cylinder_frequencies
 
 R, H, L = 0.297, 0.006, 1.4
 STEEL = Material(E=210e9, nu=0.3, rho=7850.0)

@@ -24,9 +24,9 @@ import numpy as np
 from mpi4py import MPI
 
 from common.case import read_case
-from solver.modal.joint import JointCase, joint_modes
-from solver.modal.classify import classify
 from geometry import tags
+from solver.modal.classify import classify
+from solver.modal.joint import JointCase, joint_modes
 
 REFINEMENTS = [  # (label, overrides) -- the first one is the default discretisation
     ("24 around, 0.08 m, p=3 (default)", []),

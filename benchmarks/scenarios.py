@@ -39,15 +39,15 @@ from common import backend  # noqa: F401
 import numpy as np
 from mpi4py import MPI
 
-from solver.installation import checkpoint
-from solver.post import report
 from common.case import read_case
-from solver.dynamics.time_loop import Observer, run
-from solver.installation.case import InstallationCase
-from solver.installation.model import attach_vibration, JointModel, set_up_joint_model, settled_modes
-from solver.installation.frequencies import choose_frequencies
 from solver.dynamics.loads import Schedule, Stage
-from solver.modal.ranking import describe_modes, JointParts
+from solver.dynamics.time_loop import Observer, run
+from solver.installation import checkpoint
+from solver.installation.case import InstallationCase
+from solver.installation.frequencies import choose_frequencies
+from solver.installation.model import JointModel, attach_vibration, set_up_joint_model, settled_modes
+from solver.modal.ranking import JointParts, describe_modes
+from solver.post import report
 
 @dataclass
 class SettledJoint:

@@ -19,12 +19,12 @@ import numpy as np
 from mpi4py import MPI
 
 import dolfinx
+from common.material import Material
 from geometry import tags
 from geometry.contact_map import plot_contact_map, rigid_contact_map
 from geometry.imperfections import ovality, read_imperfection
 from geometry.mesh import create_joint_mesh, write_paraview
 from geometry.parameters import JointGeometry, geometry_from_case
-from common.material import Material
 from solver.installation import cli
 
 DEFAULT_CASE = "scaled"

@@ -25,9 +25,9 @@ import numpy as np
 
 from geometry.parameters import JointGeometry, load_geometry
 from solver.contact import FrictionLaw
-from solver.reduced.lumped import GRAVITY, AxialLoad, LumpedModel, simulate
 from solver.installation import cli
 from solver.post.csv import write_csv
+from solver.reduced.lumped import GRAVITY, AxialLoad, LumpedModel, simulate
 from solver.reduced.shell import JointStiffness, joint_stiffness
 
 #: SPEC 7 sensitivity cases: (alpha [deg], beta [deg], mu_d)

@@ -18,8 +18,8 @@ from mpi4py import MPI
 
 from solver.installation import cli
 from solver.modal.joint import JointCase, joint_modes
-from solver.modal.ranking import describe_modes, JointParts
 from solver.modal.outputs import format_table, write_outputs
+from solver.modal.ranking import JointParts, describe_modes
 
 DEFAULT_CASE = "scaled"
 QUICK_CASE = "modal_quick"

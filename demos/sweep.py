@@ -30,11 +30,11 @@ from dataclasses import asdict
 
 from mpi4py import MPI
 
+from solver.dynamics.loads import frequency_ramp, frequency_steps
 from solver.installation import cli
 from solver.post import report
 from solver.post.csv import write_csv
 from solver.post.plots import plot_sweep
-from solver.dynamics.loads import frequency_ramp, frequency_steps
 
 DEFAULT_CASE = "sweep"
 QUICK_CASE = "quick"

@@ -18,18 +18,17 @@ import pytest
 from common import backend  # noqa: F401
 from dolfinx import fem
 
+from common.case import read_case
 from geometry import tags
 from geometry.mesh import create_joint_mesh
 from geometry.parameters import MeshOptions, geometry_from_case
-from common.case import read_case
-from solver.contact import NitscheContact, Status
+from solver.contact import FrictionLaw, NitscheContact, Status
 from solver.dynamics.damping import RayleighDamping
-from solver.dynamics.elastodynamics import assemble_structure, Elastodynamics
-from solver.installation.observers import Settlement
-from solver.dynamics.time_loop import run
-from solver.contact import FrictionLaw
+from solver.dynamics.elastodynamics import Elastodynamics, assemble_structure
 from solver.dynamics.loads import RampedAxialForce, TopFaceLoad, TPLoading
 from solver.dynamics.schemes import GeneralisedAlpha
+from solver.dynamics.time_loop import run
+from solver.installation.observers import Settlement
 
 pytestmark = pytest.mark.mpi
 

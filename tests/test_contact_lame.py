@@ -13,9 +13,8 @@ import pytest
 
 import dolfinx
 from contact_cases import MASTER, SLAVE, elastic_system, fixed, gathered, two_rings
-from solver.contact import NitscheContact, Status
 from common.material import Material
-from solver.contact import FrictionLaw
+from solver.contact import FrictionLaw, NitscheContact, Status
 from solver.dynamics.newton import solve_contact_problem
 
 pytestmark = pytest.mark.mpi

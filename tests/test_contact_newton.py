@@ -24,8 +24,7 @@ import pytest
 import dolfinx
 from petsc4py import PETSc
 from contact_cases import gathered, sliding_block
-from solver.contact import NitscheContact, Status
-from solver.contact import FrictionLaw
+from solver.contact import FrictionLaw, NitscheContact, Status
 
 pytestmark = pytest.mark.mpi
 

@@ -16,12 +16,12 @@ import numpy as np
 import pytest
 from mpi4py import MPI
 
-from geometry import tags
 from common.case import read_case
-from solver.installation.dismount import DismountPlan, dismount_case, dismount_table
-from solver.installation.runner import Installation
+from geometry import tags
 from solver.installation.case import InstallationCase
+from solver.installation.dismount import DismountPlan, dismount_case, dismount_table
 from solver.installation.model import set_up_joint_model
+from solver.installation.runner import Installation
 
 pytestmark = pytest.mark.mpi
 

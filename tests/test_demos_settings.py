@@ -8,11 +8,11 @@ import numpy as np
 import pytest
 from mpi4py import MPI
 
+from common.case import read_case
 from geometry.contact_map import tp_placement
 from geometry.imperfections import ovality
-from common.case import read_case
-from solver.installation.frequencies import Excitation, schedule_excitations
 from solver.installation.case import InstallationCase
+from solver.installation.frequencies import Excitation, schedule_excitations
 from solver.dynamics.loads import (
     PiecewiseLinearForce,
     RampedAxialForce,

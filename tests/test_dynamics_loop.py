@@ -10,13 +10,13 @@ from mpi4py import MPI
 
 from dolfinx import fem
 
+from common.case import resolve_case_path
 from geometry import tags
 from geometry.mesh import create_joint_mesh
 from geometry.parameters import MeshOptions, load_geometry
-from common.case import resolve_case_path
-from solver.installation.observers import Settlement
 from solver.dynamics.elastodynamics import StepResult
 from solver.dynamics.time_loop import run
+from solver.installation.observers import Settlement
 from solver.post.csv import CsvWriter
 
 pytestmark = pytest.mark.mpi

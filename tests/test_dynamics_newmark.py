@@ -14,11 +14,11 @@ from slepc4py import SLEPc
 from dolfinx import fem, mesh
 from dolfinx.fem.petsc import set_bc
 
-from solver.dynamics.damping import ModalDamping, RayleighDamping
-from solver.dynamics.elastodynamics import assemble_structure, Elastodynamics
-from solver.dynamics.time_loop import run
 from common.material import Material
+from solver.dynamics.damping import ModalDamping, RayleighDamping
+from solver.dynamics.elastodynamics import Elastodynamics, assemble_structure
 from solver.dynamics.schemes import GeneralisedAlpha, QuasiStatic
+from solver.dynamics.time_loop import run
 
 pytestmark = pytest.mark.mpi
 

@@ -22,14 +22,13 @@ from scipy.integrate import solve_ivp
 from dolfinx import fem, mesh
 from dolfinx.fem.petsc import assemble_vector
 
-from solver.dynamics.elastodynamics import assemble_structure, Elastodynamics
-from solver.dynamics.time_loop import run
 from common.material import Material
-from solver.contact import FrictionLaw
+from solver.contact import FrictionLaw, RigidPlaneContact, Status
+from solver.dynamics.elastodynamics import Elastodynamics, assemble_structure
 from solver.dynamics.loads import TopFaceLoad
 from solver.dynamics.schemes import GeneralisedAlpha, QuasiStatic
+from solver.dynamics.time_loop import run
 from solver.probes import PointProbe
-from solver.contact import RigidPlaneContact, Status
 
 pytestmark = pytest.mark.mpi
 

@@ -6,8 +6,8 @@ from pathlib import Path
 import pytest
 from scipy.integrate import quad
 
-from geometry.parameters import ConePart, JointGeometry, MeshOptions, load_geometry
 from common.material import Material
+from geometry.parameters import ConePart, JointGeometry, MeshOptions, load_geometry
 
 CASES = Path(__file__).resolve().parents[1] / "cases"
 

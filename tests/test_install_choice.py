@@ -3,8 +3,8 @@
 import numpy as np
 import pytest
 
-from solver.installation.settings import VibrationSettings
 from solver.installation.frequencies import choose_frequencies
+from solver.installation.settings import VibrationSettings
 from solver.modal.indicators import resonant_slip
 from solver.modal.ranking import ModeRecord
 

@@ -47,15 +47,15 @@ import numpy as np
 import pytest
 from mpi4py import MPI
 
-from solver.installation import checkpoint
 from solver.contact import Status
-from solver.installation.dismount import DismountPlan, pull_out_force
-from solver.dynamics.time_loop import run
-from solver.installation.settings import StaticForceSettings
-from solver.installation.model import attach_vibration, set_up_joint_model, settled_modes
-from solver.installation.frequencies import choose_frequencies
 from solver.dynamics.loads import Schedule, Stage, frequency_ramp
-from solver.modal.ranking import describe_modes, JointParts
+from solver.dynamics.time_loop import run
+from solver.installation import checkpoint
+from solver.installation.dismount import DismountPlan, pull_out_force
+from solver.installation.frequencies import choose_frequencies
+from solver.installation.model import attach_vibration, set_up_joint_model, settled_modes
+from solver.installation.settings import StaticForceSettings
+from solver.modal.ranking import JointParts, describe_modes
 
 pytestmark = pytest.mark.mpi
 

@@ -83,8 +83,8 @@ from mpi4py import MPI
 
 from benchmarks.scenarios import (SettledJoint, gain, harmonic_stage, late_gain, settle,
                                   stabilised)
-from solver.installation import checkpoint
 from solver.contact import NitscheContact, Status
+from solver.installation import checkpoint
 
 pytestmark = [
     pytest.mark.mpi,

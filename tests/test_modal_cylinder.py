@@ -9,13 +9,13 @@ import numpy as np
 import pytest
 from mpi4py import MPI
 
+from common.material import Material
 from geometry import tags
 from geometry.mesh import create_tube_mesh
 from geometry.parameters import ConePart, MeshOptions
-from solver.reduced.cylinder_shell import cylinder_frequencies
-from common.material import Material
-from solver.modal.eigen import EigenOptions, clamp, modal_analysis
 from solver.modal.classify import classify
+from solver.modal.eigen import EigenOptions, clamp, modal_analysis
+from solver.reduced.cylinder_shell import cylinder_frequencies
 
 from dolfinx import fem
 

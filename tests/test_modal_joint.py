@@ -10,15 +10,15 @@ from mpi4py import MPI
 import dolfinx.io.gmsh
 from dolfinx import fem, mesh
 
-from geometry import tags
 from common.case import read_case
-from solver.contact import Status
 from common.material import Material
+from geometry import tags
+from solver.contact import Status
 from solver.modal.eigen import EigenOptions, clamp, modal_analysis
 from solver.modal.interface import ContactInterface, bonded_band
 from solver.modal.joint import JointCase, joint_modes
-from solver.modal.ranking import describe_modes, JointParts
 from solver.modal.outputs import format_table, write_outputs
+from solver.modal.ranking import JointParts, describe_modes
 
 pytestmark = pytest.mark.mpi
 

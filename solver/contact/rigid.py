@@ -35,9 +35,9 @@ from dolfinx import fem
 from dolfinx.fem import petsc as fem_petsc
 
 from common.material import Material
-from solver.elasticity import sigma
 from solver.contact.friction import FrictionLaw
 from solver.contact.model import Status
+from solver.elasticity import sigma
 
 @dataclass
 class PlaneContactState:

@@ -251,9 +251,9 @@ class Elastodynamics:
         else:
             self.contact.set_reference(self.u, dt)
             starts = self.initial_guesses(u_old, dt)
-            A, b, condensation = self.A, self._b, self._condensation
+            b, condensation = self._b, self._condensation  # the Newton workspace holds A (or A_hat)
             if condensation is not None:
-                A, b = condensation.A_hat, self._b_hat
+                b = self._b_hat
                 condensation.reduce_load(self._b, b)
             iterations = 0
             for start in starts:

@@ -46,9 +46,9 @@ from solver.installation.case import InstallationCase, case_differences
 from solver.installation.frequencies import Excitation, choose_frequencies, schedule_excitations
 from solver.installation.model import JointModel, attach_vibration, set_up_joint_model, settled_modes
 from solver.installation.observers import ContactZoneGuard
+from solver.modal.eigen import ModalResult
 from solver.modal.outputs import write_csv, write_outputs
 from solver.modal.ranking import JointParts, ModeRecord, describe_modes
-from solver.modal.eigen import ModalResult
 from solver.post import paraview, plots, report
 from solver.post.csv import CsvWriter
 
@@ -309,7 +309,7 @@ class Installation:
 
     def _install_schedule(self) -> None:
         """Attach the vibration schedule to the loads through the chosen forcing."""
-        model, vib = self.model, self.case.vibration
+        model = self.model
         plans = self.plans[1:]
         if not plans:
             return

@@ -18,9 +18,9 @@ from dolfinx import fem
 from mpi4py import MPI
 from petsc4py import PETSc
 
+from common.material import Material
 from geometry import tags
 from solver.contact import FrictionLaw, NitscheContact, Status
-from common.material import Material
 
 
 class ContactInterface:

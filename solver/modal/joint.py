@@ -23,11 +23,11 @@ from common import backend  # noqa: F401  (before dolfinx)
 from dolfinx import fem
 from mpi4py import MPI
 
+from common.case import construct
+from common.material import Material
 from geometry import tags
 from geometry.mesh import create_joint_mesh
 from geometry.parameters import JointGeometry, MeshOptions, material_from_dict
-from common.case import construct
-from common.material import Material
 from solver.modal.eigen import EigenOptions, ModalResult, clamp, modal_analysis
 from solver.modal.interface import ContactInterface, bonded_band
 

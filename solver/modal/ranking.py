@@ -23,10 +23,10 @@ import numpy as np
 from dolfinx import fem
 
 from common.material import Material
-from solver.modal.eigen import ModalResult
 from solver.dynamics.loads import PointLoad, TopFaceLoad, eccentric_amplitude, shaker_point
-from solver.modal.indicators import InterfaceSampler, energy_shares, modal_force, resonant_slip
 from solver.modal.classify import classify
+from solver.modal.eigen import ModalResult
+from solver.modal.indicators import InterfaceSampler, energy_shares, modal_force, resonant_slip
 
 
 @dataclass(frozen=True)

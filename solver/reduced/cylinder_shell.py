@@ -15,8 +15,7 @@ terms grows. Rotary inertia is neglected. SI units; frequencies in Hz.
 from typing import Literal
 
 import numpy as np
-from numpy.polynomial import Polynomial
-from numpy.polynomial import legendre
+from numpy.polynomial import Polynomial, legendre
 from scipy.linalg import eigh
 
 from common.material import Material

@@ -34,8 +34,8 @@ import numpy as np
 import numpy.typing as npt
 from scipy.integrate import solve_bvp
 
-from geometry.parameters import ConePart, JointGeometry
 from common.material import Material
+from geometry.parameters import ConePart, JointGeometry
 
 #: default relative tolerance of the collocation solver
 BVP_TOL = 1e-8
