@@ -3,9 +3,14 @@
 Conventions: displacement u in m, stress in Pa; the material is ``common.material.Material``.
 """
 
+from __future__ import annotations
+
+from typing import TYPE_CHECKING
+
 import ufl
 
-from common.material import Material
+if TYPE_CHECKING:
+    from common.material import Material
 
 __all__ = ["epsilon", "sigma"]
 

@@ -236,3 +236,11 @@ def test_parameter_study_varies_one_thing_at_a_time():
     assert [v.name for v in select(study, ["slow_decay"])] == ["base", "slow_decay"]
     with pytest.raises(ValueError, match="unknown variant"):
         select(study, ["wet_friction"])
+
+
+def test_quick_preset_is_the_tiny_mesh_with_the_coarse_contact(quick_case, coarse_case):
+    """cases/quick.toml extends cases/coarse.toml: the landing contact settings on 12 x 0.2 m."""
+    quick, coarse = quick_case(), coarse_case()
+    assert quick.contact == coarse.contact and quick.friction == coarse.friction
+    assert (quick.mesh.n_circumferential, quick.mesh.axial_size, quick.mesh.contact_axial_size) == (12, 0.2, 0.0)
+    assert quick.self_weight.ramp_time_s == 0.012 and not quick.output.paraview
