@@ -15,8 +15,6 @@ import numpy.typing as npt
 from mpi4py import MPI
 from petsc4py import PETSc
 
-import dolfinx
-import dolfinx.fem.petsc
 
 __all__ = ["PointMatrices", "assemble_point_vector", "grouped_products"]
 
@@ -45,11 +43,10 @@ def grouped_products(key: npt.NDArray, L: npt.NDArray, R: npt.NDArray):
     return order[starts], K
 
 
-def assemble_point_vector(V: dolfinx.fem.FunctionSpace, size: int, rows: list[npt.NDArray],
-                          vals: list[npt.NDArray]) -> PETSc.Vec:
-    """A ghosted PETSc vector in V's layout with the values ``vals`` summed into the global
-    rows ``rows`` (lists of arrays, one pair per chunk of points); ``size``: global length."""
-    b = dolfinx.fem.petsc.create_vector(V)
+def assemble_point_vector(b: PETSc.Vec, size: int, rows: list[npt.NDArray], vals: list[npt.NDArray]) -> None:
+    """Fill the ghosted PETSc vector ``b`` (``dolfinx.fem.petsc.create_vector`` of the space)
+    with the values ``vals`` summed into the global rows ``rows`` (lists of arrays, one pair per
+    chunk of points); ``size``: global length."""
     with b.localForm() as loc:
         loc.set(0.0)
     if rows:
@@ -59,7 +56,6 @@ def assemble_point_vector(V: dolfinx.fem.FunctionSpace, size: int, rows: list[np
                     addv=PETSc.InsertMode.ADD_VALUES)
     b.assemblyBegin()
     b.assemblyEnd()
-    return b
 
 
 class PointMatrices:
@@ -68,9 +64,10 @@ class PointMatrices:
     ``assemble(blocks, vals, cache)``: ``blocks`` is a list of (groups, d) arrays of global
     dofs, each group's d x d block filled from ``vals`` (all blocks' values, row-major, in
     order). With ``cache`` the matrix and its COO pattern are kept under that name and reused
-    while the blocks are unchanged (on every rank: the COO preallocation is collective), and a
-    copy is returned, tagged with the pattern (attribute ``coo_pattern``: equal tags, equal
-    sparsity), which lets a solver refill a factorised sum in place.
+    while the blocks are unchanged (on every rank: the COO preallocation is collective); the
+    cached matrix itself is returned (overwritten by the next call under that name), tagged with
+    its pattern (attribute ``coo_pattern``: equal tags, equal sparsity), which lets a solver
+    refill a factorised sum in place.
     """
 
     def __init__(self, comm: MPI.Comm, sizes: tuple[int, int]):
@@ -96,10 +93,7 @@ class PointMatrices:
                 if cached is not None:
                     cached[1].destroy()
                 self._cached[cache] = (blocks, A, next(_pattern_tags))
+                A.setAttr("coo_pattern", self._cached[cache][2])  # same tag: same sparsity
         A.setValuesCOO(vals, addv=PETSc.InsertMode.INSERT_VALUES)
         A.assemble()
-        if cache is None:
-            return A
-        J = A.copy()
-        J.setAttr("coo_pattern", self._cached[cache][2])  # same tag: same sparsity
-        return J
+        return A

@@ -55,7 +55,8 @@ class ContactModel(Protocol):
     """Everything ``Elastodynamics`` and ``ContactNewtonSolver`` call on a contact object.
 
     A step: ``set_reference(u_n, dt)``, then at each iterate ``update(u)`` and
-    ``residual()`` / ``jacobian()`` (PETSc objects in the layout of V, owned by the caller).
+    ``residual()`` / ``jacobian()`` (PETSc objects in the layout of V, owned by the model and
+    overwritten by the next call: a caller copies what it keeps).
     A model without a capability implements it trivially (a rigid plane has no round-off
     floor estimate, no reversal limit and no memory beyond the step).
     """

@@ -31,6 +31,7 @@ import numpy as np
 import numpy.typing as npt
 
 import dolfinx
+import dolfinx.fem.petsc
 
 from common.material import Material
 from solver.contact.assembly import PointMatrices, assemble_point_vector, grouped_products
@@ -110,6 +111,7 @@ class NitscheContact:
         self._slave_blocks = imap.local_to_global(self.slave.dofs.ravel()).reshape(self.slave.dofs.shape)
         self._sizes = (imap.size_local * 3, imap.size_global * 3)
         self._matrices = PointMatrices(V.mesh.comm, self._sizes)  # the Jacobian's COO pattern cached
+        self._residual = dolfinx.fem.petsc.create_vector(V)  # returned by residual()
         u0 = dolfinx.fem.Function(V)
         self.dt: float | None = None
         self.state: ContactState | None = None  #: the contact state at the last update
@@ -273,7 +275,8 @@ class NitscheContact:
 
     # -- assembly ------------------------------------------------------------------------
     def residual(self) -> PETSc.Vec:
-        """Contact residual r(v) at the last update, a ghosted PETSc vector in V's layout [N].
+        """Contact residual r(v) at the last update, a ghosted PETSc vector in V's layout [N]
+        (this object's vector, overwritten by the next call: copy it to keep it).
 
         Evaluated as r(v) = sum_q w [T^T c + jump^T j] with the slave traction operator T
         (sigma_n(v) = n . T v, sigma_t(v) = (I - n n) T v), c = theta/gamma ((lambda_n - sigma_n) n
@@ -298,7 +301,8 @@ class NitscheContact:
             r = np.concatenate([r_s.reshape(len(idx), -1), r_m.reshape(len(idx), -1)], axis=1)
             rows.append(self._global_dofs(idx).ravel())
             vals.append((self.slave.weights[idx][:, None] * r).ravel())
-        return assemble_point_vector(self.V, self._sizes[1], rows, vals)
+        assemble_point_vector(self._residual, self._sizes[1], rows, vals)
+        return self._residual
 
     def _tangent_rows(self, idx, E, jump, stick, slip, consistent: bool) -> npt.NDArray:
         """n dlambda_n + dlambda_t (q, 3, nd) at normal-tied points, from E = T - gamma jump.
@@ -375,7 +379,8 @@ class NitscheContact:
         return self._matrices.assemble(blocks, vals, cache)
 
     def jacobian(self) -> PETSc.Mat:
-        """Generalized-Newton Jacobian of the contact residual at the last update [N/m]."""
+        """Generalized-Newton Jacobian of the contact residual at the last update [N/m] (this
+        object's matrix, overwritten by the next call: copy it to keep it)."""
         return self._assemble_matrix(self._active, self._stick, self._slip, consistent=True, cache="jacobian")
 
     def interface_stiffness(self, status: npt.NDArray | Status, theta: int | None = None,

@@ -178,19 +178,20 @@ class RigidPlaneContact:
         """No state carried between steps."""
 
     def residual(self) -> PETSc.Vec:
-        """Contact residual vector r_c(u) [N] (a new vector owned by the caller)."""
+        """Contact residual vector r_c(u) [N] (this object's vector, overwritten by the next call)."""
         with self._b.localForm() as loc:
             loc.set(0.0)
         fem_petsc.assemble_vector(self._b, self._forms["residual"])
         self._b.ghostUpdate(addv=PETSc.InsertMode.ADD, mode=PETSc.ScatterMode.REVERSE)
-        return self._b.copy()
+        return self._b
 
     def jacobian(self) -> PETSc.Mat:
-        """Generalised derivative d r_c / d u [N/m], no boundary conditions (a new matrix owned by the caller)."""
+        """Generalised derivative d r_c / d u [N/m], no boundary conditions (this object's matrix,
+        overwritten by the next call)."""
         self._A.zeroEntries()
         fem_petsc.assemble_matrix(self._A, self._forms["jacobian"])
         self._A.assemble()
-        return self._A.copy()
+        return self._A
 
     def normal_force(self) -> float:
         """Total contact force int p ds [N] (per unit thickness in 2D), on every rank."""
