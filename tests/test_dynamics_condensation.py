@@ -77,6 +77,7 @@ def test_condensed_solve_equals_direct_solve():
     sizes = condensation.sizes
     assert sizes["zone"] + sizes["bulk"] == N
     assert sizes["interface"] == 3 * (2 * N_AROUND) * 3 * 3
+    assert sizes["parts"] == 3  # the MP below and above the zone, the TP above it: one ring each
 
     b = A.createVecLeft()  # a load on every dof, the same for any number of ranks
     b.array_w[:] = np.sin(1.0 + np.arange(*b.getOwnershipRange()))
@@ -94,6 +95,23 @@ def test_condensed_solve_equals_direct_solve():
     error = u.x.petsc_vec.copy()
     error.axpy(-1.0, direct)
     assert error.norm() <= 1e-10 * direct.norm()
+
+
+def test_update_equals_a_new_condensation():
+    """Condensing A(dt2) by updating the condensation of A(dt1) gives the condensation built anew."""
+    _, _, V, bcs, M, K, contact = coarse_joint()
+    scheme = GeneralisedAlpha.from_spectral_radius(0.0)
+    operators = []
+    for dt in (1 / 9000, 1 / 4000):
+        A = K.copy()
+        A.axpy(scheme.coefficients(dt)[0], M)
+        operators.append(A)
+    updated = BulkCondensation(operators[0], V, contact.support_cells)
+    updated.update(operators[1])
+    new = BulkCondensation(operators[1], V, contact.support_cells)
+    difference = updated.A_hat.copy()
+    difference.axpy(-1.0, new.A_hat)
+    assert difference.norm() <= 1e-12 * new.A_hat.norm()
 
 
 def settle(condense_bulk: bool):

@@ -34,9 +34,10 @@ class BlockLU:
     when A is block diagonal with identity rows off the zone and J lives in the zone
     (``solver.dynamics.condensation``). ``zone``: this rank's zone dofs as local indices.
 
-    It remembers its last input v and output z = P^-1 v, for ``SumOperator``."""
+    ``lu``: the direct solver of the factors in use (the Newton solver sets it). It remembers
+    its last input v and output z = P^-1 v, for ``SumOperator``."""
 
-    def __init__(self, lu: PETSc.KSP, zone: np.ndarray | None):
+    def __init__(self, lu: PETSc.KSP | None, zone: np.ndarray | None):
         self.lu, self.zone = lu, zone
         self.last: tuple[int, PETSc.Vec] | None = None  # (handle of z, v)
         self._vz = self._zz = None
@@ -60,18 +61,29 @@ class SumOperator:
     """Action of A + J (PETSc python matrix context). FGMRES multiplies each preconditioned
     vector z = P^-1 v right after making it; then (A + J) z = v + (J - J_P) z, with J_P the
     Jacobian in the factorised P = A + J_P, which needs no product with A (the bulk of the
-    work; J lives on the interface). Round-off: that of the LU solve's residual."""
+    work; J lives on the interface). ``difference``: J - J_P assembled (one product instead of
+    two), or None (then J and J_P are multiplied), or ``ZERO`` when J is J_P (no product at
+    all). Round-off: that of the LU solve's residual."""
 
-    def __init__(self, A: PETSc.Mat, J: PETSc.Mat, J_P: PETSc.Mat, preconditioner: BlockLU):
+    ZERO = "zero"
+
+    def __init__(self, A: PETSc.Mat, J: PETSc.Mat, J_P: PETSc.Mat, preconditioner: BlockLU,
+                 difference: PETSc.Mat | str | None = None):
         self.A, self.J, self.J_P, self.preconditioner = A, J, J_P, preconditioner
+        self.difference = difference
         self._work = J.createVecLeft()
 
     def mult(self, mat, x, y):
         last = self.preconditioner.last
         if last is not None and last[0] == x.handle:
-            self.J.multAdd(x, last[1], y)
-            self.J_P.mult(x, self._work)
-            y.axpy(-1.0, self._work)
+            if self.difference is self.ZERO:
+                last[1].copy(y)
+            elif self.difference is not None:
+                self.difference.multAdd(x, last[1], y)
+            else:
+                self.J.multAdd(x, last[1], y)
+                self.J_P.mult(x, self._work)
+                y.axpy(-1.0, self._work)
         else:
             self.A.mult(x, y)
             self.J.multAdd(x, y, y)

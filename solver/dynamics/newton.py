@@ -43,9 +43,23 @@ import numpy as np
 import dolfinx
 
 from solver.contact.model import ContactModel
-from solver.dynamics.linear_algebra import BlockLU, SumOperator, direct_solver
+from solver.dynamics.factor_store import Factors, FactorStore
+from solver.dynamics.linear_algebra import BlockLU, SumOperator
 
 __all__ = ["ContactNewtonSolver", "NewtonResult", "solve_contact_problem"]
+
+
+@dataclass
+class _Step:
+    """Work vectors of a Newton step: the correction du, the iterate x0 it starts from, A du,
+    and A x - b at x0 and at the current trial point (A u is linear along the step: one
+    product with A per iteration)."""
+
+    du: PETSc.Vec
+    x0: PETSc.Vec
+    A_du: PETSc.Vec
+    linear0: PETSc.Vec
+    linear: PETSc.Vec
 
 
 @dataclass
@@ -103,6 +117,8 @@ class ContactNewtonSolver:
         zone: global dofs (this rank's part) off which A is the identity and J vanishes (the
             condensed system of ``solver.dynamics.condensation.BulkCondensation``): only the zone block
             of A + J is factorised. None: A + J is factorised whole.
+        factorisations_kept: factorisations of A + J kept at once; each correction takes the one
+            whose contact status is nearest the iterate's (``solver.dynamics.factor_store``).
     """
 
     def __init__(
@@ -122,6 +138,7 @@ class ContactNewtonSolver:
         max_gap_change: float | None = None,
         limit_reversal: bool = True,
         zone: PETSc.IS | None = None,
+        factorisations_kept: int = 3,
     ):
         if max_iterations < 1:
             raise ValueError(f"max_iterations must be >= 1, got {max_iterations}")
@@ -163,45 +180,31 @@ class ContactNewtonSolver:
         self.ksp.setTolerances(rtol=krylov_rtol, atol=0.0, max_it=max(refactor_after, 5))
         self.ksp.setInitialGuessNonzero(False)
         self.zone = zone
-        self._A_factored = A if zone is None else A.createSubMatrix(zone, zone)
-        self._lu = direct_solver(comm, package=lu_solver)
+        self._store = FactorStore(A, zone, lu_solver, factorisations_kept)
         pc = self.ksp.getPC()
         pc.setType(PETSc.PC.Type.PYTHON)
-        self._preconditioner = BlockLU(self._lu, None if zone is None else zone.getIndices() - A.getOwnershipRange()[0])
+        self._preconditioner = BlockLU(None, None if zone is None else zone.getIndices() - A.getOwnershipRange()[0])
         pc.setPythonContext(self._preconditioner)
-        self._J_P: PETSc.Mat | None = None  # the J in the factorised A + J
-        self._P: PETSc.Mat | None = None
-        self._P_pattern = None  # coo_pattern tag of the J in _P
+        self._current: Factors | None = None  # the factors of the last correction
+        self._bc_rows_hit: tuple | None = None  # (coo_pattern tag, whether J has Dirichlet rows)
         self._refactor_next = False
-        self.factorizations = 0
 
-    def _factorise(self, J: PETSc.Mat) -> None:
-        """Factorise A + J (its zone block with ``zone``). When J carries the same ``coo_pattern``
-        tag as the J of the factorised matrix (``NitscheContact`` tags its Jacobians), A + J has
-        the same sparsity: the matrix is refilled in place and only the numeric factorisation
-        is redone (no new ordering)."""
-        pattern = J.getAttr("coo_pattern")
-        if self._J_P is not None:
-            self._J_P.destroy()
-        self._J_P = J.copy()
-        if self.zone is not None:
-            J = J.createSubMatrix(self.zone, self.zone)
-        same = self._P is not None and pattern is not None and pattern == self._P_pattern
-        if self._comm.allreduce(same, op=MPI.LAND):  # collective: both branches are
-            self._P.zeroEntries()
-            self._P.axpy(1.0, self._A_factored, PETSc.Mat.Structure.SUBSET_NONZERO_PATTERN)
-            self._P.axpy(1.0, J, PETSc.Mat.Structure.SUBSET_NONZERO_PATTERN)
-        else:
-            if self._P is not None:
-                self._P.destroy()
-            self._P = self._A_factored.copy()
-            self._P.axpy(1.0, J, PETSc.Mat.Structure.DIFFERENT_NONZERO_PATTERN)
-            self._P_pattern = pattern
-        if self.zone is not None:
-            J.destroy()
-        self._lu.setOperators(self._P)
-        self._lu.setUp()
-        self.factorizations += 1
+    def set_operator(self, A: PETSc.Mat) -> None:
+        """A has new values in the same sparsity (e.g. another time step): the next correction
+        factorises afresh (the solver objects, and the factorisation's ordering, are kept)."""
+        self.A = A
+        self._store.set_operator(A)
+        self._current = None
+        self._refactor_next = True
+
+    @property
+    def factorizations(self) -> int:
+        """Numeric factorisations of A + J so far."""
+        return self._store.factorizations
+
+    def _use(self, factors: Factors) -> None:
+        self._current = factors
+        self._preconditioner.lu = factors.lu
 
     def _forcing(self, norms: list[float], eta_old: float, tol: float) -> float:
         """GMRES relative tolerance of the next correction (Eisenstat-Walker choice 2, safeguarded)."""
@@ -216,23 +219,23 @@ class ContactNewtonSolver:
         eta = min(eta, self.forcing_max)
         return max(eta, 0.5 * tol / norms[-1], self.krylov_rtol)
 
-    def _correction(self, J: PETSc.Mat, F: PETSc.Vec, du: PETSc.Vec, timings: dict, eta: float) -> int:
-        """Solve (A + J) du = -F to GMRES relative tolerance eta; returns GMRES iterations
-        (refactorising when needed).
+    def _correction(self, J: PETSc.Mat, status: np.ndarray, F: PETSc.Vec, du: PETSc.Vec, timings: dict,
+                    eta: float) -> int:
+        """Solve (A + J) du = -F to GMRES relative tolerance eta, preconditioned by the kept factors
+        nearest the contact ``status`` of J; returns GMRES iterations (refactorising when needed).
 
         The factors are reused until a solve needs more than ``refactor_after // 2`` GMRES
-        iterations; the next correction then refactorises.
+        iterations; the next correction then factorises anew.
         """
         rhs = F.copy()
         rhs.scale(-1.0)
         self._preconditioner.last = None
-        fresh = self._P is None or self.refactor_after == 0 or self._refactor_next
+        fresh = self._store.empty or self.refactor_after == 0 or self._refactor_next
         self.ksp.setTolerances(rtol=eta)
         t0 = time.perf_counter()
-        if fresh:
-            self._factorise(J)
-        op = PETSc.Mat().createPython(self.A.getSizes(), SumOperator(self.A, J, self._J_P, self._preconditioner),
-                                      comm=self.A.getComm())
+        self._use(self._store.factorise(J, status) if fresh else self._store.nearest(status))
+        operator = SumOperator(self.A, J, self._current.J_P, self._preconditioner, self._difference(J, fresh))
+        op = PETSc.Mat().createPython(self.A.getSizes(), operator, comm=self.A.getComm())
         op.setUp()
         self.ksp.setOperators(op)
         timings["factorise"] += time.perf_counter() - t0
@@ -241,8 +244,8 @@ class ContactNewtonSolver:
         its = self.ksp.getIterationNumber()
         if not fresh and self.ksp.getConvergedReason() <= 0:
             t1 = time.perf_counter()
-            self._factorise(J)
-            op.getPythonContext().J_P = self._J_P
+            self._use(self._store.factorise(J, status))
+            operator.J_P, operator.difference = self._current.J_P, SumOperator.ZERO
             timings["factorise"] += time.perf_counter() - t1
             self.ksp.solve(rhs, du)
             its += self.ksp.getIterationNumber()
@@ -259,10 +262,39 @@ class ContactNewtonSolver:
             raise RuntimeError(f"linear solve failed (KSP reason {reason})")
         return its
 
-    def _residual(self, b: PETSc.Vec, contact: ContactModel, u: dolfinx.fem.Function, F: PETSc.Vec, timings: dict,
-                  update: bool = True) -> float:
-        """F = A u - b + r_c(u) (contact updated at u unless ``update`` is False, zero on Dirichlet
-        rows); returns ||F||."""
+    def _difference(self, J: PETSc.Mat, fresh: bool) -> PETSc.Mat | str | None:
+        """J - J_P for ``SumOperator``: ZERO right after factorising J; assembled in J_P's
+        sparsity when J has the same ``coo_pattern`` (collective); else None."""
+        if fresh:
+            return SumOperator.ZERO
+        factors = self._current
+        pattern = J.getAttr("coo_pattern")
+        same = pattern is not None and pattern == factors.pattern
+        if not self._comm.allreduce(same, op=MPI.LAND):
+            return None
+        if factors.D is None:
+            factors.D = factors.J_P.duplicate(copy=False)
+        J.copy(factors.D, PETSc.Mat.Structure.SAME_NONZERO_PATTERN)
+        factors.D.axpy(-1.0, factors.J_P, PETSc.Mat.Structure.SAME_NONZERO_PATTERN)
+        return factors.D
+
+    def _clear_bc_rows(self, J: PETSc.Mat) -> None:
+        """Zero J's Dirichlet rows, if it has any (checked once per sparsity pattern)."""
+        pattern = J.getAttr("coo_pattern")
+        if pattern is None or self._bc_rows_hit is None or self._bc_rows_hit[0] != pattern:
+            indptr = J.getValuesCSR()[0]
+            start = J.getOwnershipRange()[0]
+            rows = start + np.flatnonzero(np.diff(indptr))
+            hit = self._comm.allreduce(bool(np.intersect1d(rows, self._bc_rows).size), op=MPI.LOR)
+            self._bc_rows_hit = (pattern, hit)
+        if self._bc_rows_hit[1]:
+            J.setOption(PETSc.Mat.Option.KEEP_NONZERO_PATTERN, True)  # J's owner refills this pattern
+            J.zeroRows(self._bc_rows, diag=0.0)
+
+    def _residual(self, linear: PETSc.Vec, contact: ContactModel, u: dolfinx.fem.Function, F: PETSc.Vec,
+                  timings: dict, update: bool = True) -> float:
+        """F = linear + r_c(u) with linear = A u - b (contact updated at u unless ``update`` is
+        False, zero on Dirichlet rows); returns ||F||."""
         t0 = time.perf_counter()
         if update:
             contact.update(u)
@@ -270,56 +302,59 @@ class ContactNewtonSolver:
         rc = contact.residual()
         with rc.localForm() as loc:
             loc.array[self._bc_local[self._bc_local < loc.array.size]] = 0.0
-        self.A.mult(u.x.petsc_vec, F)
-        F.axpy(-1.0, b)
+        linear.copy(F)
         F.axpy(1.0, rc)
-        rc.destroy()
         timings["contact update"] += t1 - t0
         timings["contact assembly"] += time.perf_counter() - t1
         return F.norm()
 
-    def _trial(self, b, contact, u, x0, du, alpha: float, F, timings: dict) -> float:
+    def _trial(self, step: "_Step", contact, u, alpha: float, F, timings: dict) -> float:
         """Move to u = x0 + alpha du; returns ||F|| there (contact updated at u)."""
         x = u.x.petsc_vec
-        x0.copy(x)
-        x.axpy(alpha, du)
+        step.x0.copy(x)
+        x.axpy(alpha, step.du)
         u.x.scatter_forward()
-        return self._residual(b, contact, u, F, timings)
+        step.linear0.copy(step.linear)
+        step.linear.axpy(alpha, step.A_du)  # A u - b = (A x0 - b) + alpha A du
+        return self._residual(step.linear, contact, u, F, timings)
 
-    def _newton_step(self, b, contact, u, x0, du, F, norm: float, timings: dict) -> tuple[float, float]:
+    def _newton_step(self, step: "_Step", contact, u, F, norm: float, timings: dict) -> tuple[float, float]:
         """Save u in x0 and take the Newton step, shortened by the gap limit; if that does not lower
         ||F|| (= norm at x0) and some slipping point's friction would reverse on the way, shortened
         to where the first one would. Returns (alpha, ||F||) of the step taken."""
-        u.x.petsc_vec.copy(x0)
+        u.x.petsc_vec.copy(step.x0)
+        step.linear.copy(step.linear0)
+        self.A.mult(step.du, step.A_du)
         gap = contact.state.gap.copy() if self.max_gap_change is not None else None
         slip = contact.slip_directions() if self.limit_reversal and self.max_backtracks else None
-        trial = self._trial(b, contact, u, x0, du, 1.0, F, timings)
+        trial = self._trial(step, contact, u, 1.0, F, timings)
         alpha = 1.0 if gap is None else self._gap_limited_step(gap, contact.state.gap)
         reversal = 1.0 if slip is None else self._comm.allreduce(contact.reversal_limit(*slip), op=MPI.MIN)
         if alpha < 1.0:
-            trial = self._trial(b, contact, u, x0, du, alpha, F, timings)
+            trial = self._trial(step, contact, u, alpha, F, timings)
         if trial >= norm and reversal < alpha:
             alpha = reversal
-            trial = self._trial(b, contact, u, x0, du, alpha, F, timings)
+            trial = self._trial(step, contact, u, alpha, F, timings)
         return alpha, trial
 
-    def _backtrack(self, b, contact, u, x0, du, F, norm: float, alpha: float, trial: float, timings: dict) -> float:
+    def _backtrack(self, step: "_Step", contact, u, F, norm: float, alpha: float, trial: float,
+                   timings: dict) -> float:
         """From the step x0 + alpha du (||F|| = trial there), halve the step (up to ``max_backtracks``
         times) while ||F|| >= norm. Generalized Newton on stick/slip/open switches can cycle (e.g.
         with velocity-weakening friction); backtracking breaks such cycles. If no trial step
-        lowers ||F||, the one with the smallest ||F|| is kept. Leaves u, F and the contact state
-        at the accepted point; returns its ||F||.
+        lowers ||F||, the one with the smallest ||F|| is kept. Leaves u, F, A u - b and the contact
+        state at the accepted point; returns its ||F||.
         """
         best = (trial, alpha)
         for _ in range(self.max_backtracks):
             if trial < norm:
                 return trial
             alpha *= 0.5
-            trial = self._trial(b, contact, u, x0, du, alpha, F, timings)
+            trial = self._trial(step, contact, u, alpha, F, timings)
             best = min(best, (trial, alpha))
         if trial < norm or best[1] == alpha:
             return trial
-        return self._trial(b, contact, u, x0, du, best[1], F, timings)
+        return self._trial(step, contact, u, best[1], F, timings)
 
     def _gap_limited_step(self, gap: np.ndarray, trial_gap: np.ndarray) -> float:
         """Largest fraction (<= 1, the same on all ranks) of the step keeping each point's approach
@@ -342,8 +377,9 @@ class ContactNewtonSolver:
         u.x.scatter_forward()
         x = u.x.petsc_vec
         F = x.duplicate()
-        du = x.duplicate()
-        x0 = x.duplicate()
+        step = _Step(*(x.duplicate() for _ in range(5)))
+        self.A.mult(x, step.linear)
+        step.linear.axpy(-1.0, b)
         norms, linear = [], []
         timings = {"contact update": 0.0, "contact assembly": 0.0, "factorise": 0.0, "linear solve": 0.0}
         b_norm = b.norm() if load_norm is None else load_norm
@@ -352,7 +388,7 @@ class ContactNewtonSolver:
         step_small = False
         eta = self.forcing_max
         # e.g. a time step's predictor, where the caller evaluated the contact status
-        norm = self._residual(b, contact, u, F, timings, update=not contact.updated_at(u))
+        norm = self._residual(step.linear, contact, u, F, timings, update=not contact.updated_at(u))
         for k in range(self.max_iterations + 1):
             norms.append(norm)
             if not np.isfinite(norm):
@@ -371,21 +407,19 @@ class ContactNewtonSolver:
                                       f"iteration {best}, now {norm:.3e} N at iteration {k}")
                 break
             t0 = time.perf_counter()
-            J = contact.jacobian()
-            J.zeroRows(self._bc_rows, diag=0.0)
+            J = contact.jacobian()  # the contact's matrix: not ours to destroy
+            self._clear_bc_rows(J)
             timings["contact assembly"] += time.perf_counter() - t0
             try:
                 eta = self._forcing(norms, eta, tol)
-                linear.append(self._correction(J, F, du, timings, eta))
+                linear.append(self._correction(J, contact.state.status, F, step.du, timings, eta))
             except (PETSc.Error, RuntimeError) as err:
                 result = NewtonResult(False, k, norms, linear, message=f"linear solve failed at Newton iteration {k}: {err}")
                 break
-            finally:
-                J.destroy()
-            alpha, trial = self._newton_step(b, contact, u, x0, du, F, norm, timings)
-            norm = self._backtrack(b, contact, u, x0, du, F, norm, alpha, trial, timings)
-            step_small = du.norm(PETSc.NormType.INFINITY) <= self.stol * x.norm(PETSc.NormType.INFINITY)
-        for vec in (F, du, x0):
+            alpha, trial = self._newton_step(step, contact, u, F, norm, timings)
+            norm = self._backtrack(step, contact, u, F, norm, alpha, trial, timings)
+            step_small = step.du.norm(PETSc.NormType.INFINITY) <= self.stol * x.norm(PETSc.NormType.INFINITY)
+        for vec in (F, *step.__dict__.values()):
             vec.destroy()
         result.factorizations = self.factorizations - factorizations0
         result.timings = timings
@@ -393,13 +427,7 @@ class ContactNewtonSolver:
 
     def destroy(self) -> None:
         self.ksp.destroy()
-        self._lu.destroy()
-        if self._J_P is not None:
-            self._J_P.destroy()
-        if self.zone is not None:
-            self._A_factored.destroy()
-        if self._P is not None:
-            self._P.destroy()
+        self._store.destroy()
 
 
 def solve_contact_problem(
