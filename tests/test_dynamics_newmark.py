@@ -17,6 +17,7 @@ from dolfinx.fem.petsc import set_bc
 from common.material import Material
 from solver.dynamics.damping import ModalDamping, RayleighDamping
 from solver.dynamics.elastodynamics import Elastodynamics, assemble_structure
+from solver.dynamics.fidelity import accuracy, amplification_matrix, discrete_frequency
 from solver.dynamics.schemes import GeneralisedAlpha, QuasiStatic
 from solver.dynamics.time_loop import run
 
@@ -235,3 +236,74 @@ def test_scheme_names():
     assert not scheme_from_name("quasi-static").dynamic
     with pytest.raises(ValueError, match="unknown time scheme"):
         scheme_from_name("euler")
+
+
+def fitted_accuracy(q: np.ndarray, omega_dt: float) -> tuple[float, float]:
+    """(damping ratio, period error) of the discrete oscillator behind the sequence q_n.
+
+    Past the start-up (the spurious root of the amplification matrix has died out), q obeys
+    q_{n+1} = A q_n - B q_{n-1} with A = 2 Re(lambda), B = |lambda|^2 of the principal pair;
+    least squares give A and B, hence lambda."""
+    q = q[20:]
+    (A, B), *_ = np.linalg.lstsq(np.column_stack([q[1:-1], -q[:-2]]), q[2:], rcond=None)
+    lam = complex(A / 2, np.sqrt(B - A**2 / 4))
+    phase = np.angle(lam)
+    return -np.log(abs(lam)) / phase, omega_dt / phase - 1.0
+
+
+SCHEMES = {"newmark": GeneralisedAlpha(), **{f"generalised-alpha {rho}": GeneralisedAlpha.from_spectral_radius(rho)
+                                             for rho in (0.0, 0.5, 0.8, 1.0)}}
+
+
+@pytest.mark.parametrize("steps_per_period", [12, 16, 32])
+@pytest.mark.parametrize("name", SCHEMES)
+def test_algorithmic_damping_and_period_error(beam, modes, name, steps_per_period):
+    """Free vibration in the lowest mode, no physical damping: the damping ratio and the period
+    error of the computed modal history equal those of the scheme's amplification matrix
+    (solver.dynamics.fidelity.accuracy)."""
+    V, M, K, bcs = beam
+    omega, phi = modes[0]
+    scheme = SCHEMES[name]
+    dt = 2 * np.pi / omega / steps_per_period
+    problem = start_in_mode(V, M, K, bcs, phi, scheme)
+    rows = run(problem, 8 * steps_per_period * dt, dt, observers=[modal_coordinate(M, phi)], progress=False)
+    q = np.array([1.0] + [r["q"] for r in rows])
+    damping, period_error = fitted_accuracy(q, omega * dt)
+    expected = accuracy(scheme, steps_per_period)
+    print(f"{name}, {steps_per_period} steps per period: damping {100 * damping:.5f} % "
+          f"(closed form {100 * expected.damping_ratio:.5f} %), period error {100 * period_error:.5f} % "
+          f"(closed form {100 * expected.period_error:.5f} %)")
+    assert damping == pytest.approx(expected.damping_ratio, abs=1e-8)
+    assert period_error == pytest.approx(expected.period_error, rel=1e-6)
+
+
+@pytest.mark.parametrize("steps_per_period", [8, 16, 24, 64])
+def test_trapezoidal_rule_in_closed_form(steps_per_period):
+    """Average acceleration (and generalised-alpha with rho_inf = 1): no algorithmic damping and
+    arg(lambda) = 2 atan(omega dt / 2), so T_h / T = (omega dt / 2) / atan(omega dt / 2); its
+    discrete natural frequency for a step dt is (2 / dt) atan(omega dt / 2) / (2 pi)."""
+    x = 2 * np.pi / steps_per_period
+    for scheme in (GeneralisedAlpha(), GeneralisedAlpha.from_spectral_radius(1.0)):
+        result = accuracy(scheme, steps_per_period)
+        assert result.damping_ratio == pytest.approx(0.0, abs=1e-12)
+        assert result.period_error == pytest.approx(0.5 * x / np.arctan(0.5 * x) - 1, rel=1e-10)
+        f, dt = 120.0, 1e-3
+        w = 2 * np.pi * f
+        assert discrete_frequency(scheme, f, dt) == pytest.approx(2 / dt * np.arctan(0.5 * w * dt) / (2 * np.pi), rel=1e-12)
+
+
+@pytest.mark.parametrize("rho_inf", [0.0, 0.3, 0.55, 0.8])
+def test_spectral_radius_at_infinity(rho_inf):
+    """The amplification matrix's spectral radius tends to rho_inf as omega dt grows (the design
+    property of generalised-alpha, Chung and Hulbert 1993), and the principal root's damping
+    grows with omega dt."""
+    scheme = GeneralisedAlpha.from_spectral_radius(rho_inf)
+    radius = max(abs(np.linalg.eigvals(amplification_matrix(scheme, 1e8))))
+    assert radius == pytest.approx(rho_inf, abs=1e-4)
+    damping = [accuracy(scheme, n).damping_ratio for n in (64, 32, 16, 8)]
+    assert np.all(np.diff(damping) >= 0)
+
+
+def test_quasi_static_has_no_resonance():
+    with pytest.raises(ValueError, match="no inertia"):
+        accuracy(QuasiStatic(), 24)
