@@ -43,9 +43,14 @@ def test_best_ranks_plus_m2n1_plus_control():
     assert "m = 2, n = 1" in next(e for e in modal if e.frequency_Hz == 120.0).reason
     (control,) = [e for e in chosen if e.role == "control"]
     assert all(e.frequency_Hz != 86.4 for e in chosen)
-    # the point of [86 / 2, 150] farthest in ratio from all natural frequencies: the geometric
-    # mean of 50 and 86 (a factor 1.311 from both; 43 Hz is 1.163 from 50 Hz, the gap between
-    # 120 and 150 Hz 1.118 from either side)
+    # the point of [86 / 2, 150] farthest in ratio from all natural and lead-in frequencies: the
+    # geometric mean of 50 Hz and the 68 Hz lead-in (a factor 1.166 from both; 43 Hz is 1.163
+    # from 50 Hz, the gap between 120 and 150 Hz 1.118 from either side)
+    assert control.frequency_Hz == pytest.approx(np.sqrt(50.0 * 68.0), abs=0.05)
+    assert "a factor 1.17 from the nearest natural frequency (50.0 Hz)" in control.reason
+    # without a lead-in: the geometric mean of 50 and 86 Hz (a factor 1.311 from both)
+    alone = choose_frequencies(RECORDS, VibrationSettings(n_frequencies=2, max_frequency_hz=300.0, lead_in_hz=()))
+    (control,) = [e for e in alone if e.role == "control"]
     assert control.frequency_Hz == pytest.approx(np.sqrt(50.0 * 86.0), abs=0.05)
     assert "a factor 1.31 " in control.reason
     assert all(e.amplitude_N == 3600.0 for e in chosen if e.role != "lead-in")

@@ -1,14 +1,14 @@
 """The stage gains and frequency-selectivity lines of the installation summary (no finite
 elements involved)."""
 
-from types import SimpleNamespace
-
 import numpy as np
 import pytest
 
 from solver.installation.frequencies import Excitation
+from solver.installation.planning import StagePlan
 from solver.post.report import (SELECTIVE, format_selectivity, format_stabilisation,
-                           frequency_selectivity, late_gain, stabilised, stage_summary)
+                           frequency_selectivity, late_gain, slip_episodes, stabilised, stage_summary,
+                           stick_slip_events)
 
 
 def _stage(k: int, f: float, start: float, end: float, gained: float, second_half=None) -> dict:
@@ -35,8 +35,7 @@ def test_stage_summary_gains_start_from_the_previous_stage():
                {"stage": 0, "time_s": 2.0, "settlement_mm": 3.0, "newton_iterations": 1}]
     rows = [{"stage": 1, "time_s": 2.0 + 0.01 * k, "settlement_mm": s, "newton_iterations": 3}
             for k, s in enumerate([3.5, 3.6, 3.6, 3.6, 3.7], start=1)]
-    plan = SimpleNamespace(name="vibration 1", start_s=2.0, end_s=2.05, dt_s=0.01,
-                           frequency_Hz=100.0, amplitude_N=3600.0, reason="")
+    plan = StagePlan("vibration 1", 2.0, 2.05, 0.01, 100.0, 3600.0)
     s = stage_summary(1, plan, rows, history + rows, slip_rate_mm_s=1.0)
     assert s["gained_mm"] == pytest.approx(0.7)
     assert s["gained_second_half_mm"] == pytest.approx(0.1)  # s(2.05) - s(2.025) = 3.7 - 3.6
@@ -121,3 +120,15 @@ def test_stabilisation_lines_sort_the_vibration_stages():
     assert lines[3] == "  no settlement: 300.0 Hz"
     assert stabilised(1.0, 0.049) and not stabilised(1.0, 0.051) and not stabilised(0.0, 0.0)
     assert format_stabilisation([st(0.0, 2.4, 0.3)]) == []
+
+
+def test_slip_episodes_count_and_size():
+    """Two slides of 0.3 and 0.5 mm at 10 mm/s between rests (one row = 10 ms): two events of
+    those sizes; a rate below the threshold is no event."""
+    t = 0.01 * np.arange(1, 31)
+    rate = np.zeros(30)
+    rate[5:8], rate[15:20] = 10.0, 10.0  # mm/s
+    s = np.cumsum(rate * 0.01)
+    assert slip_episodes(t, s, 0.0, 0.0, 1, 1.0) == pytest.approx([0.3, 0.5])
+    assert stick_slip_events(t, s, 0.0, 0.0, 1, 1.0) == 2
+    assert slip_episodes(t, 0.05 * s, 0.0, 0.0, 1, 1.0) == []

@@ -63,11 +63,19 @@ class ModalDamping:
             raise ValueError("modal damping needs zeta >= 0 and positive frequencies")
         self.coefficients = 2 * zeta * 2 * np.pi * np.asarray(frequencies_hz, dtype=float)  # [1/s]
         self.zeta = zeta
+        self.frequencies_hz = np.asarray(frequencies_hz, dtype=float)
         self.M_modes = []  # u_i = M phi_i
         for phi in modes:
             y = M.createVecLeft()
             M.mult(phi, y)
             self.M_modes.append(y)
+
+    def ratio(self, f: float) -> float:
+        """Damping ratio [-] of a response at f [Hz]: that of the damped mode nearest in ratio
+        (|ln(f / f_i)|), zero beyond 10 % above the highest damped mode (undamped there)."""
+        if f > 1.1 * self.frequencies_hz.max():
+            return 0.0
+        return float(self.zeta[np.argmin(np.abs(np.log(f / self.frequencies_hz)))])
 
     def mult(self, v: PETSc.Vec, out: PETSc.Vec) -> None:
         """out += C v [N]."""

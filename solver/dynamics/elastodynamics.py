@@ -95,6 +95,7 @@ class Elastodynamics:
         self._f_old, self._f_new = K.createVecLeft(), K.createVecLeft()
         self._b, self._work, self._b_hat = K.createVecLeft(), K.createVecLeft(), K.createVecLeft()
         self._r_contact_old = K.createVecLeft()  # r_c(u_n), used when alpha_f > 0
+        self.failed_steps = 0  #: steps that did not converge (each one cut by ``run``)
         self.contact_status: np.ndarray | None = None  #: contact status at the end of the last step (this rank's points)
         self.last_result: StepResult | None = None  #: outcome of the last step attempted
         self.A = K.duplicate(copy=True)
@@ -128,10 +129,15 @@ class Elastodynamics:
         self.A.axpy(c_M + c_C * a_R, self.M, structure=PETSc.Mat.Structure.SUBSET_NONZERO_PATTERN)
         self._ksp.setOperators(self.A)
         self._dt_of_A = dt
-        if self.contact is not None:  # Newton workspace (keeps an LU of A + J_c) for this A
-            for workspace in (self._newton, self._condensation):
-                if workspace is not None:
-                    workspace.destroy()
+        if self.contact is None:
+            return
+        if self._newton is not None:  # the Newton workspace (an LU of A + J_c), for the new A
+            if self._condensation is not None:
+                self._condensation.update(self.A)
+                self._newton.set_operator(self._condensation.A_hat)
+            else:
+                self._newton.set_operator(self.A)
+        else:
             if self.condense_bulk:
                 self._condensation = BulkCondensation(self.A, self.V, self.contact.support_cells,
                                                       lu_solver=self.newton_options.get("lu_solver", "mumps"))
@@ -152,9 +158,7 @@ class Elastodynamics:
         if self.contact is not None:
             self.contact.set_reference(self.u, 1.0)
             self.contact.update(self.u)
-            r = self.contact.residual()
-            r.copy(self._r_contact_old)
-            r.destroy()
+            self.contact.residual().copy(self._r_contact_old)
             rhs.axpy(-1.0, self._r_contact_old)
         rhs.array_w[self._bc_dofs] = 0.0
         ksp = direct_solver(self.V.mesh.comm, self.M, prefix="dynamics_mass_")
@@ -269,6 +273,7 @@ class Elastodynamics:
             result = StepResult(res.converged, iterations, res.residual_norms, res.message)
         self.last_result = result
         if not result.converged:
+            self.failed_steps += 1
             self.u.x.array[:] = u_old
             return result
         self.u.x.scatter_forward()
@@ -276,10 +281,8 @@ class Elastodynamics:
             self.contact_status = self.contact.state.status.copy()
         v_new, a_new = self.scheme.update(self.u.x.array, u_old, self.v.x.array, self.a.x.array, dt)
         self.v.x.array[:], self.a.x.array[:] = v_new, a_new
-        if self.contact is not None and self.scheme.alpha_f:
-            r = self.contact.residual()
-            r.copy(self._r_contact_old)
-            r.destroy()
+        if self.contact is not None:  # kept whatever the scheme: a later one may weight it (alpha_f)
+            self.contact.residual().copy(self._r_contact_old)
         self._f_new.copy(self._f_old)
         self.t += dt
         return result

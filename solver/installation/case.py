@@ -16,6 +16,8 @@ from geometry.imperfections import RadialDeviation
 from geometry.parameters import JointGeometry, MeshOptions, geometry_from_case
 from solver.contact import FrictionLaw
 from solver.dynamics.loads import Schedule
+from solver.dynamics.schemes import Scheme, scheme_from_name
+from solver.installation.planning import check_time_scheme
 from solver.installation.settings import (
     ContactSettings,
     DampingSettings,
@@ -110,6 +112,7 @@ class InstallationCase:
                     "vibration.modal_stage = false needs a [[schedule]] without 'mode k' or "
                     "'ranked k' stages (the automatic schedule comes from the modal stage)"
                 )
+            check_time_scheme(settings["time"], settings["damping"])
             imperfections = _imperfections(case, joint)
             if vib.forcing == "shaker" and not 0 <= vib.shaker_height_m <= joint.tp.total_length:
                 raise ValueError(
@@ -128,6 +131,15 @@ class InstallationCase:
             imperfections=imperfections,
             **settings,
         )
+
+    def vibration_scheme(self) -> Scheme:
+        """The time scheme of the vibration stages ([time])."""
+        return scheme_from_name(self.time.scheme, self.time.rho_inf)
+
+    def self_weight_scheme(self) -> Scheme:
+        """The time scheme of the self-weight stage ([self_weight] scheme, else [time]'s)."""
+        sw = self.self_weight
+        return scheme_from_name(sw.scheme, sw.rho_inf) if sw.scheme else self.vibration_scheme()
 
     def deviations(self) -> dict[str, RadialDeviation]:
         """The radial deviations of the imperfect parts (``geometry.imperfections``)."""

@@ -25,6 +25,14 @@ class Excitation:
     n: int
     rank: int
     reason: str
+    #: the frequency the force is applied at [Hz]: for a stage at a natural frequency the
+    #: time-discrete model's natural frequency of that mode (``planning.compensate``); None: frequency_Hz
+    forcing_Hz: float | None = None
+
+    @property
+    def drive_Hz(self) -> float:
+        """The frequency of the force [Hz]."""
+        return self.frequency_Hz if self.forcing_Hz is None else self.forcing_Hz
 
 
 PAIR_TOLERANCE = 0.02  #: relative frequency difference within which two modes are one pair
@@ -47,8 +55,10 @@ def choose_frequencies(records: list[ModeRecord], settings: VibrationSettings) -
     * the lowest (m = 2, n = 1) mode among all computed modes if not among them (SPEC 5.4: the
       most effective; also above ``max_frequency_hz``, unless ``m2n1_mode`` is false);
     * a non-modal control frequency: the point of [f_lo / 2, f_hi] farthest from every computed
-      natural frequency in ratio (|ln(f / f_n)|: the dynamic amplification of a mode depends
-      on f / f_n), f_lo and f_hi the lowest and highest chosen natural frequency (with a single
+      natural frequency and every lead-in frequency in ratio (|ln(f / f_n)|: the dynamic
+      amplification of a mode depends on f / f_n; at a lead-in frequency the joint has already
+      settled to what that excitation holds), f_lo and f_hi the lowest and highest chosen natural
+      frequency (with a single
       chosen frequency f: f_hi = min(1.5 f, max_frequency_hz)). The octave below f_lo admits a
       control in the quasi-static band below the lowest modes, where a point between dense
       higher modes may lie within a few per cent of one (docs/install.md).
@@ -85,11 +95,12 @@ def choose_frequencies(records: list[ModeRecord], settings: VibrationSettings) -
     chosen.sort(key=lambda e: e.frequency_Hz)
     if settings.control and chosen:
         natural = np.array([r.frequency_Hz for r in modes])
+        avoided = np.concatenate([natural, settings.lead_in_hz])
         lo, hi = chosen[0].frequency_Hz, chosen[-1].frequency_Hz
         if hi - lo < 1e-6 * hi:
             hi = min(1.5 * hi, settings.max_frequency_hz)
         grid = np.geomspace(0.5 * lo, hi, 2001)
-        ratio = np.min(np.abs(np.log(grid[:, None] / natural[None, :])), axis=1)
+        ratio = np.min(np.abs(np.log(grid[:, None] / avoided[None, :])), axis=1)
         f_c = float(grid[np.argmax(ratio)])
         nearest = float(natural[np.argmin(np.abs(np.log(f_c / natural)))])
         chosen.append(
@@ -101,8 +112,8 @@ def choose_frequencies(records: list[ModeRecord], settings: VibrationSettings) -
                 -1,
                 -1,
                 0,
-                f"non-modal control: a factor {np.exp(ratio.max()):.2f} from the nearest natural "
-                f"frequency ({nearest:.1f} Hz)",
+                f"non-modal control: a factor {np.exp(np.abs(np.log(f_c / nearest))):.2f} from the "
+                f"nearest natural frequency ({nearest:.1f} Hz)",
             )
         )
         chosen.sort(key=lambda e: e.frequency_Hz)

@@ -22,7 +22,6 @@ from solver.contact import NitscheContact, Status
 from solver.dynamics.damping import ModalDamping, RayleighDamping
 from solver.dynamics.elastodynamics import Elastodynamics, assemble_structure
 from solver.dynamics.loads import PointLoad, Schedule, TopFaceLoad, TPLoading, shaker_point
-from solver.dynamics.schemes import scheme_from_name
 from solver.installation.case import InstallationCase
 from solver.installation.observers import Settlement
 from solver.modal.eigen import EigenOptions, ModalResult, clamp, modal_analysis
@@ -116,7 +115,7 @@ def set_up_joint_model(comm: MPI.Comm, case: InstallationCase) -> JointModel:
         K,
         bcs,
         load=TPLoading(top, static_axial=static),
-        scheme=scheme_from_name(sw.scheme or case.time.scheme, case.time.rho_inf),
+        scheme=case.self_weight_scheme(),
         damping=damping,
         contact=contact,
         newton_options={

@@ -29,7 +29,7 @@ import math
 import sys
 import time
 from collections.abc import Callable
-from dataclasses import asdict, dataclass, replace
+from dataclasses import asdict, replace
 from pathlib import Path
 from typing import Any
 
@@ -39,53 +39,18 @@ from mpi4py import MPI
 from solver.contact import Status
 from solver.dynamics.elastodynamics import Elastodynamics
 from solver.dynamics.loads import Schedule, TPLoading
-from solver.dynamics.schemes import scheme_from_name
 from solver.dynamics.time_loop import run
 from solver.installation import checkpoint
 from solver.installation.case import InstallationCase, case_differences
 from solver.installation.frequencies import Excitation, choose_frequencies, schedule_excitations
 from solver.installation.model import JointModel, attach_vibration, set_up_joint_model, settled_modes
 from solver.installation.observers import ContactZoneGuard
+from solver.installation.planning import StagePlan, compensate, format_fidelity, plan_vibration
 from solver.modal.eigen import ModalResult
 from solver.modal.outputs import write_csv, write_outputs
 from solver.modal.ranking import JointParts, ModeRecord, describe_modes
 from solver.post import paraview, plots, report
 from solver.post.csv import CsvWriter
-
-
-@dataclass
-class StagePlan:
-    """A stage of the time loop: name, interval [s], nominal step [s], frequency, amplitude."""
-
-    name: str
-    start_s: float
-    end_s: float
-    dt_s: float
-    frequency_Hz: float
-    amplitude_N: float
-    reason: str = ""
-
-
-def _plan_vibration(
-    schedule: Schedule, steps_per_period: int, reasons: list[str]
-) -> list[StagePlan]:
-    plans = []
-    for i, (stage, start) in enumerate(zip(schedule.stages, schedule.stage_starts)):
-        f_max = max(stage.frequency(0.0), stage.frequency(stage.duration_s))
-        periods = max(1, math.ceil(stage.duration_s * f_max)) if f_max > 0 else 1
-        dt = stage.duration_s / (periods * steps_per_period)
-        plans.append(
-            StagePlan(
-                f"vibration {i + 1}",
-                float(start),
-                float(start + stage.duration_s),
-                dt,
-                stage.frequency(0.0),
-                stage.amplitude(0.0),
-                reasons[i] if i < len(reasons) else "",
-            )
-        )
-    return plans
 
 
 class Installation:
@@ -106,8 +71,12 @@ class Installation:
         output: str | Path,
         log: Callable[[str], None] | None = None,
         progress: bool = True,
+        on_stage: Callable[[str, Any], None] | None = None,
     ):
         self.comm, self.case = comm, case
+        #: instrumentation: called with ("start", plan) before and ("end", summary) after each
+        #: time-stepping stage, and ("modal", seconds) after the modal stage
+        self.on_stage = on_stage or (lambda event, data: None)
         self.output = Path(output)
         self.log = log or (_write_line if comm.rank == 0 else (lambda s: None))
         self.progress = progress and comm.rank == 0
@@ -151,9 +120,11 @@ class Installation:
     def _observer(self, stage_index: int, plan: StagePlan, writer: CsvWriter, bar):
         model = self.model
         loading: TPLoading = model.problem.load
+        failed = [model.problem.failed_steps]  # failed attempts before the last accepted step
 
         def observe(problem: Elastodynamics) -> dict[str, float]:
             t = problem.t
+            cuts, failed[0] = problem.failed_steps - failed[0], problem.failed_steps
             prev_t = self.history[-1]["time_s"] if self.history else 0.0
             schedule = loading.schedule or (loading.shaker[1] if loading.shaker else None)
             state = model.contact.state
@@ -174,6 +145,7 @@ class Installation:
                 ),
                 **model.settlement(problem),
                 "newton_iterations": problem.last_result.iterations if problem.last_result else 0,
+                "step_cuts": cuts,
                 "stick_fraction": counts[0] / n_points,
                 "slip_fraction": counts[1] / n_points,
                 "normal_force_N": normal,
@@ -196,6 +168,7 @@ class Installation:
         problem = model.problem
         steps = self.case.output.checkpoint_every
         n_chunks = max(1, math.ceil((plan.end_s - plan.start_s) / (steps * plan.dt_s) - 1e-9))
+        self.on_stage("start", plan)
         observers = [self._observer(index, plan, writer, bar)]
         mesh = self.case.mesh
         if mesh.contact_axial_size > 0:
@@ -225,6 +198,7 @@ class Installation:
             time.perf_counter() - wall0 if len(self.history) > rows0 else float("nan")
         )
         self.stages.append(summary)
+        self.on_stage("end", summary)
         report.write_stage_table(self.stages, self.output / "stages.csv", self.comm)
         self._write_state(plan.name)
         self.log(report.format_stage(summary))
@@ -247,15 +221,21 @@ class Installation:
         vib = self.case.vibration
         if self.case.schedule is None:
             stages = [
-                vib.stage(vib.stage_duration_s, e.frequency_Hz, e.amplitude_N)
+                vib.stage(vib.stage_duration_s, e.drive_Hz, e.amplitude_N)
                 for e in self.excitations
             ]
         else:  # 'mode k' / 'ranked k' stages at the frequencies found by the modal stage
             stages = [
-                replace(s, frequency_hz=e.frequency_Hz) if isinstance(s.frequency_hz, str) else s
+                replace(s, frequency_hz=e.drive_Hz) if isinstance(s.frequency_hz, str) else s
                 for s, e in zip(self.case.schedule.stages, self.excitations)
             ]
         return Schedule(stages, start_s=start_s)
+
+    def _stage_durations(self) -> list[float]:
+        """Duration [s] of each vibration stage (one per excitation)."""
+        if self.case.schedule is None:
+            return [self.case.vibration.stage_duration_s] * len(self.excitations)
+        return [s.duration_s for s in self.case.schedule.stages]
 
     def _modal_stage(self) -> None:
         """Modes of the settled joint (contact tangent at its current status); frequency choice.
@@ -288,13 +268,14 @@ class Installation:
             self.excitations = schedule_excitations(
                 self.case.schedule, self.natural_frequencies, chosen
             )
+        scheme, steps = self.case.vibration_scheme(), self.case.time.steps_per_period
+        self.excitations = compensate(self.excitations, self._stage_durations(), scheme, steps)
         if self.excitations:  # (none: the run ends after the modal stage)
-            self.plans += _plan_vibration(
-                self._schedule(model.problem.t),
-                self.case.time.steps_per_period,
-                [e.reason for e in self.excitations],
+            self.plans += plan_vibration(
+                self._schedule(model.problem.t), scheme, steps, model.damping.ratio, self.excitations
             )
         report.write_choice(self.excitations, self.output / "frequencies.csv", self.comm)
+        self.on_stage("modal", time.perf_counter() - t0)
         if vib.modal_stage:
             self.log(
                 f"modal stage: {len(records)} modes of the settled joint "
@@ -306,6 +287,10 @@ class Installation:
         for e in self.excitations:
             amp = e.amplitude_N if isinstance(e.amplitude_N, str) else f"{e.amplitude_N:.0f} N"
             self.log(f"  {e.frequency_Hz:8.2f} Hz  {amp:>9}  {e.role:8} {e.reason}")
+        if self.plans[1:]:
+            self.log("time discretisation of the vibration stages (docs/dynamics.md, resonance fidelity):")
+        for plan in self.plans[1:]:
+            self.log("  " + format_fidelity(plan))
 
     def _install_schedule(self) -> None:
         """Attach the vibration schedule to the loads through the chosen forcing."""
@@ -389,10 +374,8 @@ class Installation:
                 self._checkpoint(1, 0)
             self._install_schedule()
             if len(self.plans) > 1 and next_stage < len(self.plans):
-                if (
-                    sw.scheme or case.time.scheme
-                ) != case.time.scheme:  # vibration stages: the [time] scheme
-                    model.problem.set_scheme(scheme_from_name(case.time.scheme, case.time.rho_inf))
+                if case.self_weight_scheme() != case.vibration_scheme():
+                    model.problem.set_scheme(case.vibration_scheme())
                 bar = self._bar(self.plans[-1].end_s - model.problem.t)
                 for index in range(next_stage, len(self.plans)):
                     self._run_stage(index, next_chunk if index == next_stage else 0, writer, bar)

@@ -124,7 +124,10 @@ class SelfWeightSettings:
     ramp_time_s: float = 2.0
     hold_s: float = 0.1  #: held after the ramp [s]
     dt_s: float = 0.01  #: time step [s]
-    scheme: str = ""  #: "" = the [time] scheme; or quasi-static / newmark / generalised-alpha
+    #: "" = the [time] scheme and rho_inf; or quasi-static / newmark / generalised-alpha (with
+    #: ``rho_inf``): the self-weight stage may damp numerically what the vibration stages must not
+    scheme: str = ""
+    rho_inf: float = 0.0  #: generalised-alpha spectral radius of the self-weight stage [-]
 
     def __post_init__(self) -> None:
         if not self.force_N < 0:
@@ -140,6 +143,8 @@ class SelfWeightSettings:
             raise ValueError(f"dt_s must lie in (0, ramp_time_s + hold_s], got {self.dt_s} s")
         if self.scheme:
             _check_choice("scheme", self.scheme, ("newmark", "generalised-alpha", "quasi-static"))
+        if not 0 <= self.rho_inf <= 1:
+            raise ValueError(f"rho_inf must lie in [0, 1], got {self.rho_inf}")
 
     @property
     def duration_s(self) -> float:

@@ -114,9 +114,11 @@ def joint_modes(
     comm: MPI.Comm, case: JointCase, log: Callable[[str], None] = lambda s: None
 ) -> JointModes:
     """Lowest modes of the installed joint: by default MP bottom clamped and TP top free; the
-    TP tied to the MP over ``band_height`` at its lower edge (collective)."""
+    TP tied to the MP over ``band_height`` at its lower edge (collective). The mesh is [mesh]
+    without its contact zone's fine axial elements (a bonded band needs no contact resolution),
+    with [modal] n_circumferential around."""
     t0 = time.perf_counter()
-    mesh_options = case.mesh
+    mesh_options = replace(case.mesh, contact_axial_size=0.0)
     if case.modal.n_circumferential:
         mesh_options = replace(mesh_options, n_circumferential=case.modal.n_circumferential)
     mesh_data = create_joint_mesh(comm, case.joint, mesh_options)

@@ -39,6 +39,7 @@ HISTORY_COLUMNS = [
     "axial_force_N",
     "settlement_mm",
     "newton_iterations",
+    "step_cuts",
     "stick_fraction",
     "slip_fraction",
     "normal_force_N",
@@ -60,12 +61,40 @@ STAGE_COLUMNS = [
     "stick_slip_events",
     "newton_iterations_mean",
     "newton_iterations_max",
+    "step_cuts",
+    "natural_frequency_Hz",
+    "steps_per_period",
+    "algorithmic_damping",
+    "period_error",
+    "physical_damping",
     "wall_s",
     "reason",
 ]
 
 LATE = 0.2  #: SPEC 5.2 "each event stabilises": the last LATE of a stage ...
 LATE_SHARE = 0.05  #: ... adds less than LATE_SHARE of the stage's gain [-]
+
+
+def slip_episodes(
+    time_s: np.ndarray,
+    settlement_mm: np.ndarray,
+    s0_mm: float,
+    t0_s: float,
+    window: int,
+    slip_rate_mm_s: float,
+) -> list[float]:
+    """Settlement [mm] gained in each stick -> slip -> stick episode of the TP as a whole (see the
+    module docstring; an episode still running at the end counts up to there)."""
+    t = np.concatenate([[t0_s], time_s])
+    s = np.concatenate([[s0_mm], settlement_mm])
+    if len(t) < 2:
+        return []
+    window = min(window, len(t) - 1)  # a stage shorter than one period: its mean rate
+    rate = (s[window:] - s[:-window]) / (t[window:] - t[:-window])  # over rows i .. i + window
+    above = np.concatenate([[False], rate > slip_rate_mm_s, [False]])
+    first = np.flatnonzero(~above[:-1] & above[1:])  # window starts of each episode's first ...
+    last = np.flatnonzero(above[:-1] & ~above[1:]) - 1  # ... and last rate above the threshold
+    return [float(s[j + window] - s[i]) for i, j in zip(first, last)]
 
 
 def stick_slip_events(
@@ -77,14 +106,7 @@ def stick_slip_events(
     slip_rate_mm_s: float,
 ) -> int:
     """Transitions stick -> slip of the TP as a whole (see the module docstring)."""
-    t = np.concatenate([[t0_s], time_s])
-    s = np.concatenate([[s0_mm], settlement_mm])
-    if len(t) < 2:
-        return 0
-    window = min(window, len(t) - 1)  # a stage shorter than one period: its mean rate
-    rate = (s[window:] - s[:-window]) / (t[window:] - t[:-window])
-    slipping = np.concatenate([[False], rate > slip_rate_mm_s])
-    return int(np.count_nonzero(slipping[1:] & ~slipping[:-1]))
+    return len(slip_episodes(time_s, settlement_mm, s0_mm, t0_s, window, slip_rate_mm_s))
 
 
 def late_gain(time_s: np.ndarray, settlement_mm: np.ndarray, fraction: float) -> float:
@@ -123,6 +145,12 @@ def stage_summary(
         "stick_slip_events": stick_slip_events(t, s, s0, t0, window, slip_rate_mm_s),
         "newton_iterations_mean": float(its.mean()),
         "newton_iterations_max": int(its.max()),
+        "step_cuts": int(sum(r.get("step_cuts", 0) for r in rows)),
+        "natural_frequency_Hz": plan.natural_frequency_Hz,
+        "steps_per_period": plan.steps_per_period,
+        "algorithmic_damping": plan.algorithmic_damping,
+        "period_error": plan.period_error,
+        "physical_damping": plan.physical_damping,
         "reason": plan.reason,
     }
 
@@ -141,12 +169,20 @@ def write_choice(excitations, path: Path, comm: MPI.Comm) -> None:
 
 
 def format_stage(s: dict) -> str:
+    """One line per stage: frequency, steps, settlement, events, Newton iterations, step cuts and,
+    for a vibration stage, the time scheme's algorithmic damping and period error there."""
     f = f"{s['frequency_Hz']:7.2f} Hz" if s["frequency_Hz"] else "   static "
-    return (
+    line = (
         f"{s['name']:>12}: {f}, {s['steps']:5d} steps, settlement {s['settlement_end_mm']:8.4f} mm "
         f"({s['gained_mm']:+.4f} mm), {s['stick_slip_events']} stick-slip event(s), "
-        f"Newton {s['newton_iterations_mean']:.2f}/step"
+        f"Newton {s['newton_iterations_mean']:.2f}/step, {s.get('step_cuts', 0)} step cut(s)"
     )
+    if s.get("steps_per_period"):
+        natural = f", mode {s['natural_frequency_Hz']:.2f} Hz" if s.get("natural_frequency_Hz") else ""
+        line += (f"\n{'':>14}{s['steps_per_period']:.1f} steps/period{natural}: algorithmic damping "
+                 f"{100 * max(s['algorithmic_damping'], 0.0):.4f} % (physical {100 * s['physical_damping']:.3g} %), "
+                 f"period error {100 * s['period_error']:+.3f} %")
+    return line
 
 
 SELECTIVE = 5.0  #: SPEC 5.2 criterion: a modal stage settles >= SELECTIVE x the control [-]
