@@ -98,7 +98,9 @@ def main(argv=None) -> int:
     p.add_argument("--frequency", type=float, default=300.0, help="[Hz]")
     p.add_argument("--amplitude", type=float, default=3600.0, help="[N]")
     p.add_argument("--steps-per-period", type=int, default=30)
-    p.add_argument("--rho-inf", type=float, default=0.8, help="generalised-alpha spectral radius")
+    p.add_argument("--rho-inf", type=float, default=0.8, help="generalised-alpha spectral radius (harmonic stage)")
+    p.add_argument("--rho-inf-ramp", type=float, default=None,
+                   help="spectral radius of the self-weight stage (default: --rho-inf)")
     p.add_argument("--zeta", type=float, default=0.01, help="Rayleigh damping ratio at --zeta-frequency")
     p.add_argument("--zeta-frequency", type=float, default=120.0, help="[Hz]")
     p.add_argument("--lagged-friction", action="store_true", help="mu from the previous step's slip speed")
@@ -141,11 +143,13 @@ def main(argv=None) -> int:
     contact = NitscheContact(V, data.facet_tags, tags.TP_CONTACT, tags.MP_CONTACT, material,
                              FrictionLaw(*a.mu, d_c=a.d_c), gamma0=a.gamma0, theta=a.theta,
                              lagged_friction=a.lagged_friction)
-    ramp_end = min(a.ramp, a.max_steps * a.dt_ramp) if a.max_steps else a.ramp
+    from_checkpoint = bool(a.ramp_checkpoint) and checkpoint.exists(a.ramp_checkpoint, comm)
+    ramp_end = min(a.ramp, a.max_steps * a.dt_ramp) if a.max_steps and not from_checkpoint else a.ramp
     harmonic = Schedule([Stage(a.forcing, a.frequency, a.amplitude)], start_s=ramp_end) if a.forcing > 0 else None
     loading = TPLoading(TopFaceLoad(V, data.facet_tags, tags.TP_TOP), static_axial=RampedAxialForce(-10e3, a.ramp),
                         schedule=harmonic)
-    problem = Elastodynamics(V, M, K, bcs, load=loading, scheme=GeneralisedAlpha.from_spectral_radius(a.rho_inf),
+    rho_ramp = a.rho_inf if a.rho_inf_ramp is None else a.rho_inf_ramp
+    problem = Elastodynamics(V, M, K, bcs, load=loading, scheme=GeneralisedAlpha.from_spectral_radius(rho_ramp),
                              damping=RayleighDamping.at_frequency(a.zeta, a.zeta_frequency), contact=contact,
                              newton_options={"max_backtracks": a.backtracks, "refactor_after": a.refactor_after,
                                              "max_gap_change": a.max_gap_change, "krylov_rtol": a.krylov_rtol,
@@ -173,7 +177,7 @@ def main(argv=None) -> int:
         stages[1] = ("harmonic", ramp_end + min(a.forcing, a.max_steps * stages[1][2]), stages[1][2])
     if a.forcing <= 0:
         stages = stages[:1]
-    if a.ramp_checkpoint and checkpoint.exists(a.ramp_checkpoint, comm):
+    if from_checkpoint:
         checkpoint.restore(a.ramp_checkpoint, problem)
         say(f"self-weight stage skipped: state at t = {problem.t:.6g} s from {a.ramp_checkpoint}")
         stages = stages[1:]
@@ -182,6 +186,8 @@ def main(argv=None) -> int:
         observers.append(ContactZoneGuard(contact, a.contact_axial_size, a.contact_zone_above))
     timer = PhaseTimer().install()
     for name, t_end, dt in stages:
+        if name == "harmonic":
+            problem.set_scheme(GeneralisedAlpha.from_spectral_radius(a.rho_inf))
         timer.reset()
         t0, cpu0 = time.perf_counter(), time.process_time()
         with CsvWriter(out / f"{name}.csv", comm=comm) as writer:

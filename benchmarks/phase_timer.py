@@ -9,9 +9,12 @@ time (a phase nested in another is not counted twice) per phase:
     contact residual   NitscheContact.residual
     contact jacobian   NitscheContact.jacobian (+ Dirichlet row zeroing, copy into A + J)
     factorisation      ContactNewtonSolver._factorise (A + J_c copy and LU)
-    linear solves      ContactNewtonSolver._correction without the factorisation (GMRES)
-    condensation       solver.dynamics.condensation.BulkCondensation: building it (once per operator),
-                       the condensed load and the recovery of the bulk (one bulk solve each per step)
+    triangular solves  BlockLU.apply: one forward and back solve with the LU factors of A + J_c
+    linear solves      ContactNewtonSolver._correction without factorisation and triangular solves
+                       (GMRES, products with the interface matrices)
+    condensation       solver.dynamics.condensation.BulkCondensation: building and updating it (once
+                       per step size), the condensed load and the recovery of the bulk (one bulk solve
+                       each per step)
     bulk vectors       Elastodynamics._effective_load, load evaluation, Newmark update, A u
     other              the rest of Elastodynamics.step
 
@@ -26,10 +29,11 @@ from collections import defaultdict
 import solver.contact.nitsche
 import solver.dynamics.condensation
 import solver.dynamics.elastodynamics
+import solver.dynamics.linear_algebra
 import solver.dynamics.newton
 
 PHASES = ["pairing", "contact update", "contact residual", "contact jacobian", "factorisation",
-          "linear solves", "condensation", "bulk vectors", "other"]
+          "triangular solves", "linear solves", "condensation", "bulk vectors", "other"]
 
 
 class PhaseTimer:
@@ -81,7 +85,8 @@ class PhaseTimer:
         self._wrap(NC, "jacobian", "contact jacobian")
         self._wrap(CN, "_factorise", "factorisation")
         self._wrap(CN, "_correction", "linear solves")
-        for name in ("__init__", "reduce_load", "recover"):
+        self._wrap(solver.dynamics.linear_algebra.BlockLU, "apply", "triangular solves")
+        for name in ("__init__", "update", "reduce_load", "recover"):
             self._wrap(solver.dynamics.condensation.BulkCondensation, name, "condensation")
         for name in ("_effective_load", "_evaluate_load", "_assemble_operator"):
             self._wrap(ED, name, "bulk vectors")
@@ -111,6 +116,11 @@ class PhaseTimer:
         self.cpu.clear()
         self.calls.clear()
         self.gmres = 0
+
+    def triangular_solve_s(self) -> float:
+        """Mean wall time of one application of the LU factors (forward and back solve) [s]."""
+        calls = self.calls.get("triangular solves", 0)
+        return self.totals.get("triangular solves", 0.0) / calls if calls else float("nan")
 
     def report(self, comm, steps: int, iterations: int, say=print) -> None:
         """Print wall s/step, s/Newton iteration and CPU s/step of each phase (rank 0's times) and,
