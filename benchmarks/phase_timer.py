@@ -8,7 +8,7 @@ time (a phase nested in another is not counted twice) per phase:
     contact update     NitscheContact.update without the pairing (state at the iterate)
     contact residual   NitscheContact.residual
     contact jacobian   NitscheContact.jacobian (+ Dirichlet row zeroing, copy into A + J)
-    factorisation      ContactNewtonSolver._factorise (A + J_c copy and LU)
+    factorisation      FactorStore.factorise (A + J_c copy and LU)
     triangular solves  BlockLU.apply: one forward and back solve with the LU factors of A + J_c
     linear solves      ContactNewtonSolver._correction without factorisation and triangular solves
                        (GMRES, products with the interface matrices)
@@ -29,6 +29,7 @@ from collections import defaultdict
 import solver.contact.nitsche
 import solver.dynamics.condensation
 import solver.dynamics.elastodynamics
+import solver.dynamics.factor_store
 import solver.dynamics.linear_algebra
 import solver.dynamics.newton
 
@@ -83,7 +84,7 @@ class PhaseTimer:
         self._wrap(NC, "update", "contact update")
         self._wrap(NC, "residual", "contact residual")
         self._wrap(NC, "jacobian", "contact jacobian")
-        self._wrap(CN, "_factorise", "factorisation")
+        self._wrap(solver.dynamics.factor_store.FactorStore, "factorise", "factorisation")
         self._wrap(CN, "_correction", "linear solves")
         self._wrap(solver.dynamics.linear_algebra.BlockLU, "apply", "triangular solves")
         for name in ("__init__", "update", "reduce_load", "recover"):
