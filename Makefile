@@ -16,7 +16,7 @@ demo: env
 
 test: env
 	$(VENV)/bin/cmake -S . -B $(BUILD) -DPYTHON=$(PYTHON) -DMPIEXEC=$(MPIEXEC) >/dev/null
-	cd $(BUILD) && $(abspath $(VENV)/bin/ctest) --output-on-failure --timeout 1800 $(CTEST_ARGS)
+	cd $(BUILD) && $(abspath $(VENV)/bin/ctest) --output-on-failure --timeout 3600 $(CTEST_ARGS)
 
 clean:
 	rm -rf $(BUILD)

@@ -1,6 +1,8 @@
-"""Shared pytest set-up: the DOLFINx stack loaded in the right order first; temporary folders
-that every MPI rank shares; the test cases of ``cases/``; the demos' entry points."""
+"""Shared pytest set-up: the DOLFINx stack loaded in the right order first; the ``--slow``
+option; garbage collection and PETSc clean-up after every test; temporary folders that every
+MPI rank shares; the test cases of ``cases/``; the demos' entry points."""
 
+import gc
 import importlib.util
 import os
 from pathlib import Path
@@ -12,8 +14,31 @@ from common import backend  # noqa: E402,F401
 
 import pytest  # noqa: E402
 from mpi4py import MPI  # noqa: E402
+from petsc4py import PETSc  # noqa: E402
 
 DEMOS = Path(__file__).resolve().parents[1] / "demos"
+
+
+def pytest_addoption(parser):
+    parser.addoption("--slow", action="store_true", help="also run the tests marked slow (minutes to an hour each)")
+
+
+def pytest_collection_modifyitems(config, items):
+    if config.getoption("--slow"):
+        return
+    skip = pytest.mark.skip(reason="marked slow: runs with pytest --slow")
+    for item in items:
+        if "slow" in item.keywords:
+            item.add_marker(skip)
+
+
+@pytest.fixture(autouse=True)
+def collect_garbage():
+    """After each test: free the Python objects it left and the PETSc objects whose collective
+    destruction they deferred (the same on every rank)."""
+    yield
+    gc.collect()
+    PETSc.garbage_cleanup(MPI.COMM_WORLD)
 
 
 @pytest.fixture(scope="session")

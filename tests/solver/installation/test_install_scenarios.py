@@ -20,8 +20,8 @@ a 2 s ramp).
   contact set, solver.installation.model.settled_modes) rise with settlement: the lowest modes at
   the end of the ramp lie above those at half the load.
 
-The vibration scenarios are tests/test_install_vibration.py (SPEC 5.2, 5.3; opt-in with
-SLIPJOINT_LONG_TESTS=1, too long for the suite) and tests/test_install_dismount.py (SPEC 5.5;
+The vibration scenarios are tests/test_install_vibration.py (SPEC 5.2, 5.3; marked ``slow``,
+run with ``pytest --slow``: too long for the suite) and tests/test_install_dismount.py (SPEC 5.5;
 5.7 opt-in); docs/install.md reports their measured outcome.
 """
 

@@ -20,7 +20,7 @@ from geometry.parameters import ConePart, JointGeometry, MeshOptions, load_geome
 
 pytestmark = pytest.mark.mpi
 
-CASES = Path(__file__).resolve().parents[1] / "cases"
+CASES = Path(__file__).resolve().parents[2] / "cases"
 COMM = MPI.COMM_WORLD
 
 

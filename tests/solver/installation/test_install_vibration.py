@@ -70,11 +70,10 @@ heavy processes on the 2 cores, 28 min 48 s on 2 ranks (CPU 38 min) beside anoth
 process; the d_c = 100 part alone took 27 min 19 s serial (CPU 11 min
 24 s) and 20 min 49 s on 2 ranks beside four other heavy processes. Far above the suite's
 5 min per file; the durations cannot be cut further without breaking the physics above. So
-the tests run only with SLIPJOINT_LONG_TESTS=1 (as the sweep test of
+the tests carry the ``slow`` marker and run with ``pytest --slow`` (as the sweep test of
 tests/test_install_dismount.py).
 """
 
-import os
 from typing import NamedTuple
 
 import numpy as np
@@ -88,11 +87,7 @@ from solver.installation import checkpoint
 
 pytestmark = [
     pytest.mark.mpi,
-    pytest.mark.skipif(
-        os.environ.get("SLIPJOINT_LONG_TESTS") != "1",
-        reason="about 820 time steps, 20-30 min serial on the loaded machine, far above the "
-        "suite's budget (module docstring, docs/install.md); runs with SLIPJOINT_LONG_TESTS=1",
-    ),
+    pytest.mark.slow,  # about 820 time steps, 20-30 min serially (module docstring): pytest --slow
 ]
 
 AMPLITUDE = 3600.0  #: force amplitude A [N] (SPEC 3: the eccentric motors at 100 Hz)

@@ -10,7 +10,7 @@ from geometry.contact_map import plot_contact_map, rigid_contact_map
 from geometry.imperfections import ovality
 from geometry.parameters import JointGeometry, load_geometry
 
-CASES = Path(__file__).resolve().parents[1] / "cases"
+CASES = Path(__file__).resolve().parents[2] / "cases"
 
 
 @pytest.fixture(scope="module")

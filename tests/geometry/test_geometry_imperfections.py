@@ -14,7 +14,7 @@ from geometry.imperfections import (
 )
 from geometry.parameters import ConePart, load_geometry
 
-CASES = Path(__file__).resolve().parents[1] / "cases"
+CASES = Path(__file__).resolve().parents[2] / "cases"
 
 
 @pytest.fixture(scope="module")

@@ -16,9 +16,7 @@ from pathlib import Path
 
 import pytest
 
-pytestmark = pytest.mark.mpi  # imports the DOLFINx stack (for its versions)
-
-ROOT = Path(__file__).resolve().parents[1]
+ROOT = Path(__file__).resolve().parents[2]
 CODE_DIRS = ("common", "solver", "geometry", "demos", "tests", "benchmarks")
 WHEEL_ONLY = "dolfinx_solver"  # PyPI wheel only; imported in common/backend.py alone
 

@@ -9,7 +9,7 @@ from scipy.integrate import quad
 from common.material import Material
 from geometry.parameters import ConePart, JointGeometry, MeshOptions, load_geometry
 
-CASES = Path(__file__).resolve().parents[1] / "cases"
+CASES = Path(__file__).resolve().parents[2] / "cases"
 
 
 @pytest.fixture
