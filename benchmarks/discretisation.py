@@ -42,15 +42,20 @@ STEPS = 30
 def measure(comm: MPI.Comm, case: InstallationCase) -> dict:
     model = set_up_joint_model(comm, case)
     band = bonded_band(model.V, model.mesh_data.facet_tags, case.material, BAND_M)
-    frequencies = modal_analysis(model.V, case.material, model.bcs, [band], EigenOptions(n_modes=10)).frequencies_hz
+    frequencies = modal_analysis(
+        model.V, case.material, model.bcs, [band], EigenOptions(n_modes=10)
+    ).frequencies_hz
     dt = case.self_weight.dt_s
     comm.Barrier()
     t0 = time.perf_counter()
     rows = run(model.problem, STEPS * dt, dt, progress=False)
     comm.Barrier()
-    return {"dofs": model.n_dofs, "frequencies": np.sort(frequencies)[:10],
-            "s_per_step": (time.perf_counter() - t0) / len(rows),
-            "newton": np.mean([r["newton_iterations"] for r in rows])}
+    return {
+        "dofs": model.n_dofs,
+        "frequencies": np.sort(frequencies)[:10],
+        "s_per_step": (time.perf_counter() - t0) / len(rows),
+        "newton": np.mean([r["newton_iterations"] for r in rows]),
+    }
 
 
 def main(argv=None) -> int:
@@ -63,16 +68,25 @@ def main(argv=None) -> int:
     for label, overrides in DISCRETISATIONS:
         r = measure(comm, InstallationCase.from_dict(read_case(a.case, overrides)))
         rows.append((label, r))
-        say(f"{label}: {r['dofs']} dofs, {r['s_per_step']:.2f} s/step (Newton {r['newton']:.2f}/step), "
-            f"frequencies {' '.join(f'{f:.2f}' for f in r['frequencies'])} Hz", flush=True)
+        say(
+            f"{label}: {r['dofs']} dofs, {r['s_per_step']:.2f} s/step (Newton {r['newton']:.2f}/step), "
+            f"frequencies {' '.join(f'{f:.2f}' for f in r['frequencies'])} Hz",
+            flush=True,
+        )
     reference = rows[-1][1]["frequencies"]
-    say("\n| discretisation | dofs | " + " | ".join(f"f{i + 1} [Hz]" for i in range(10))
-        + " | largest deviation from the reference | s/step (first 0.3 s of self-weight) |")
+    say(
+        "\n| discretisation | dofs | "
+        + " | ".join(f"f{i + 1} [Hz]" for i in range(10))
+        + " | largest deviation from the reference | s/step (first 0.3 s of self-weight) |"
+    )
     say("|---|---|" + "---|" * 10 + "---|---|")
     for label, r in rows:
         deviation = np.max(np.abs(r["frequencies"] / reference - 1))
-        say(f"| {label} | {r['dofs']} | " + " | ".join(f"{f:.2f}" for f in r["frequencies"])
-            + f" | {100 * deviation:.2f} % | {r['s_per_step']:.2f} |")
+        say(
+            f"| {label} | {r['dofs']} | "
+            + " | ".join(f"{f:.2f}" for f in r["frequencies"])
+            + f" | {100 * deviation:.2f} % | {r['s_per_step']:.2f} |"
+        )
     return 0
 
 

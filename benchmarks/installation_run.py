@@ -1,7 +1,8 @@
 """Wall time per phase of an installation run: set-up, self-weight, modal stage, each vibration stage.
 
 Runs the installation pipeline of a case (default: ``cases/scaled.toml``, the converged joint
-with the reference sequence, ``demos/install.py --full``) with the phase timer of ``benchmarks/phase_timer.py`` and prints, per
+with the reference sequence, ``demos/install.py --full``) with the phase timer of
+``benchmarks/phase_timer.py`` and prints, per
 time-stepping stage: steps, wall time, s/step, Newton iterations and GMRES iterations per
 step, factorisations, step cuts, the mean time of one triangular solve with the contact zone's
 LU factors and the ratio (time per step) / (one triangular solve), then the phase breakdown of
@@ -47,38 +48,55 @@ class StageProfile:
             steps = data["steps"]
             newton = data["newton_iterations_mean"] * steps
             solve = self.timer.triangular_solve_s()
-            row = {"phase": f"{data['name']} ({data['frequency_Hz']:.1f} Hz)" if data["frequency_Hz"]
-                   else data["name"], "wall_s": wall, "steps": steps,
-                   "s_per_step": wall / max(steps, 1), "newton_per_step": data["newton_iterations_mean"],
-                   "gmres_per_step": self.timer.gmres / max(steps, 1),
-                   "factorisations": self.timer.calls.get("factorisation", 0), "step_cuts": data["step_cuts"],
-                   "solve_ms": 1e3 * solve, "ratio": wall / max(steps, 1) / solve}
+            row = {
+                "phase": f"{data['name']} ({data['frequency_Hz']:.1f} Hz)"
+                if data["frequency_Hz"]
+                else data["name"],
+                "wall_s": wall,
+                "steps": steps,
+                "s_per_step": wall / max(steps, 1),
+                "newton_per_step": data["newton_iterations_mean"],
+                "gmres_per_step": self.timer.gmres / max(steps, 1),
+                "factorisations": self.timer.calls.get("factorisation", 0),
+                "step_cuts": data["step_cuts"],
+                "solve_ms": 1e3 * solve,
+                "ratio": wall / max(steps, 1) / solve,
+            }
             self.rows.append(row)
-            self.say(f"{row['phase']}: {steps} steps in {wall:.1f} s ({row['s_per_step']:.3f} s/step), Newton "
-                     f"{row['newton_per_step']:.2f}/step, GMRES {row['gmres_per_step']:.1f}/step, "
-                     f"{row['factorisations']} factorisations, {row['step_cuts']} step cuts; one triangular "
-                     f"solve {row['solve_ms']:.1f} ms, step / solve = {row['ratio']:.1f}", flush=True)
+            self.say(
+                f"{row['phase']}: {steps} steps in {wall:.1f} s ({row['s_per_step']:.3f} s/step), Newton "
+                f"{row['newton_per_step']:.2f}/step, GMRES {row['gmres_per_step']:.1f}/step, "
+                f"{row['factorisations']} factorisations, {row['step_cuts']} step cuts; one triangular "
+                f"solve {row['solve_ms']:.1f} ms, step / solve = {row['ratio']:.1f}",
+                flush=True,
+            )
             self.timer.report(self.comm, steps, int(round(newton)), self.say)
 
     def table(self, setup_s: float, total_s: float) -> None:
-        self.say("\n| phase | wall [s] | steps | s/step | Newton/step | GMRES/step | factorisations | step cuts "
-                 "| triangular solve [ms] | step / solve |")
+        self.say(
+            "\n| phase | wall [s] | steps | s/step | Newton/step | GMRES/step | factorisations | step cuts "
+            "| triangular solve [ms] | step / solve |"
+        )
         self.say("|---|---|---|---|---|---|---|---|---|---|")
         self.say(f"| set-up | {setup_s:.1f} | | | | | | | | |")
         for r in self.rows:
             if "steps" not in r:
                 self.say(f"| {r['phase']} | {r['wall_s']:.1f} | | | | | | | | |")
                 continue
-            self.say(f"| {r['phase']} | {r['wall_s']:.1f} | {r['steps']} | {r['s_per_step']:.3f} | "
-                     f"{r['newton_per_step']:.2f} | {r['gmres_per_step']:.1f} | {r['factorisations']} | "
-                     f"{r['step_cuts']} | {r['solve_ms']:.1f} | {r['ratio']:.1f} |")
+            self.say(
+                f"| {r['phase']} | {r['wall_s']:.1f} | {r['steps']} | {r['s_per_step']:.3f} | "
+                f"{r['newton_per_step']:.2f} | {r['gmres_per_step']:.1f} | {r['factorisations']} | "
+                f"{r['step_cuts']} | {r['solve_ms']:.1f} | {r['ratio']:.1f} |"
+            )
         self.say(f"| **total** | **{total_s:.1f}** ({total_s / 60:.1f} min) | | | | | | | | |")
 
 
 def main(argv=None) -> int:
     p = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     p.add_argument("--case", default="scaled", help="case file or preset name in cases/")
-    p.add_argument("--set", action="append", default=[], metavar="TABLE.KEY=VALUE", help="case override")
+    p.add_argument(
+        "--set", action="append", default=[], metavar="TABLE.KEY=VALUE", help="case override"
+    )
     p.add_argument("--output", default="output/installation_run", help="output folder of the run")
     a = p.parse_args(argv)
     comm = MPI.COMM_WORLD

@@ -33,8 +33,18 @@ import solver.dynamics.factor_store
 import solver.dynamics.linear_algebra
 import solver.dynamics.newton
 
-PHASES = ["pairing", "contact update", "contact residual", "contact jacobian", "factorisation",
-          "triangular solves", "linear solves", "condensation", "bulk vectors", "other"]
+PHASES = [
+    "pairing",
+    "contact update",
+    "contact residual",
+    "contact jacobian",
+    "factorisation",
+    "triangular solves",
+    "linear solves",
+    "condensation",
+    "bulk vectors",
+    "other",
+]
 
 
 class PhaseTimer:
@@ -45,7 +55,9 @@ class PhaseTimer:
         self.cpu: dict[str, float] = defaultdict(float)  #: process CPU time per phase [s]
         self.calls: dict[str, int] = defaultdict(int)
         self.gmres = 0  #: GMRES iterations
-        self._stack: list[list] = []  # [phase, start, cpu start, wall and cpu time spent in nested phases]
+        self._stack: list[
+            list
+        ] = []  # [phase, start, cpu start, wall and cpu time spent in nested phases]
         self._undo: list = []
 
     def _enter(self, phase: str) -> None:
@@ -130,14 +142,20 @@ class PhaseTimer:
         per_rank = comm.allgather(dict(self.totals))
         total, total_cpu = sum(self.totals.values()), sum(self.cpu.values())
         n, its = max(steps, 1), max(iterations, 1)
-        say(f"  phase breakdown (rank 0, {steps} steps, {iterations} Newton iterations, {self.gmres} GMRES "
+        say(
+            f"  phase breakdown (rank 0, {steps} steps, {iterations} Newton iterations, {self.gmres} GMRES "
             f"iterations, {self.calls.get('factorisation', 0)} factorisations; "
-            f"slowest rank {max(sum(t.values()) for t in per_rank) / n:.3f} s/step):")
+            f"slowest rank {max(sum(t.values()) for t in per_rank) / n:.3f} s/step):"
+        )
         for phase in PHASES:
             t = self.totals.get(phase, 0.0)
-            line = (f"    {phase:17s} {t / n:8.3f} s/step {t / its:8.3f} s/iteration "
-                    f"{100 * t / total if total else 0:5.1f} %  CPU {self.cpu.get(phase, 0.0) / n:7.3f} s/step")
+            line = (
+                f"    {phase:17s} {t / n:8.3f} s/step {t / its:8.3f} s/iteration "
+                f"{100 * t / total if total else 0:5.1f} %  CPU {self.cpu.get(phase, 0.0) / n:7.3f} s/step"
+            )
             if comm.size > 1:
-                line += f"  max over ranks {max(r.get(phase, 0.0) for r in per_rank) / n:7.3f} s/step"
+                line += (
+                    f"  max over ranks {max(r.get(phase, 0.0) for r in per_rank) / n:7.3f} s/step"
+                )
             say(line + f"  ({self.calls.get(phase, 0)} calls)")
         say(f"    {'total':17s} {total / n:8.3f} s/step{'':33s}CPU {total_cpu / n:7.3f} s/step")

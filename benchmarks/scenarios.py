@@ -45,9 +45,15 @@ from solver.dynamics.time_loop import Observer, run
 from solver.installation import checkpoint
 from solver.installation.case import InstallationCase
 from solver.installation.frequencies import choose_frequencies
-from solver.installation.model import JointModel, attach_vibration, set_up_joint_model, settled_modes
+from solver.installation.model import (
+    JointModel,
+    attach_vibration,
+    set_up_joint_model,
+    settled_modes,
+)
 from solver.modal.ranking import JointParts, describe_modes
 from solver.post import report
+
 
 @dataclass
 class SettledJoint:
@@ -68,8 +74,13 @@ def settle(comm: MPI.Comm, overrides: list[str], case_name: str = "coarse") -> S
     run(model.problem, sw.duration_s, sw.dt_s, progress=False)
     result, _ = settled_modes(model, case.vibration.n_modes)
     parts = JointParts.for_joint(model.V, model.mesh_data, model.placed)
-    records = describe_modes(result, case.material, parts, zeta=case.damping.zeta,
-                             m_max=min(12, (2 * case.mesh.n_circumferential - 1) // 2))
+    records = describe_modes(
+        result,
+        case.material,
+        parts,
+        zeta=case.damping.zeta,
+        m_max=min(12, (2 * case.mesh.n_circumferential - 1) // 2),
+    )
     chosen = choose_frequencies(records, case.vibration)
     f_r = next(e.frequency_Hz for e in sorted(chosen, key=lambda e: e.rank) if e.role == "modal")
     f_c = next(e.frequency_Hz for e in chosen if e.role == "control")
@@ -77,7 +88,10 @@ def settle(comm: MPI.Comm, overrides: list[str], case_name: str = "coarse") -> S
 
 
 def harmonic_stage(
-    model: JointModel, frequency: float, amplitude: float, duration: float,
+    model: JointModel,
+    frequency: float,
+    amplitude: float,
+    duration: float,
     observers: Sequence[Observer] = (),
 ) -> np.ndarray:
     """Run one harmonic stage (``frequency`` [Hz], ``amplitude`` [N], ``duration`` [s]) from
@@ -94,8 +108,7 @@ def harmonic_stage(
 
     dt = 1.0 / (frequency * model.case.time.steps_per_period)
     n_steps = max(1, round(duration / dt))
-    run(problem, t0 + duration, duration / n_steps, observers=[observe, *observers],
-        progress=False)
+    run(problem, t0 + duration, duration / n_steps, observers=[observe, *observers], progress=False)
     return np.array(rows)
 
 
@@ -116,7 +129,9 @@ def stabilised(history: np.ndarray) -> bool:
 
 def main(argv=None) -> int:
     p = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    p.add_argument("--case", default="coarse", help="case: a preset name or a TOML file (default: coarse)")
+    p.add_argument(
+        "--case", default="coarse", help="case: a preset name or a TOML file (default: coarse)"
+    )
     p.add_argument("--set", action="append", default=[], metavar="TABLE.KEY=VALUE")
     p.add_argument("--amplitude", type=float, default=3600.0, help="force amplitude A [N]")
     p.add_argument("--factor", type=float, default=2.0, help="amplitude factor of branch (c)")
@@ -132,26 +147,35 @@ def main(argv=None) -> int:
     model, f_r, f_c = joint.model, joint.f_r, joint.f_c
     problem = model.problem
     say(f"joint: {model.n_dofs} dofs, {comm.size} rank(s)")
-    say(f"self-weight: settlement {model.settlement(problem)['settlement_mm']:.4f} mm "
-        f"({time.perf_counter() - wall:.0f} s)")
+    say(
+        f"self-weight: settlement {model.settlement(problem)['settlement_mm']:.4f} mm "
+        f"({time.perf_counter() - wall:.0f} s)"
+    )
     say(f"natural frequencies [Hz]: {np.round(joint.frequencies_hz, 2)}")
     say(f"ranked natural frequency f_r = {f_r:.2f} Hz, control f_c = {f_c:.2f} Hz")
 
     # whole periods: the force is zero where every branch starts (at phase 0)
     lead = harmonic_stage(model, f_c, a.amplitude, max(1, round(a.lead_in * f_c)) / f_c)
-    say(f"lead-in at f_c, {a.amplitude:.0f} N: +{gain(lead):.4f} mm, "
-        f"last 20 % +{late_gain(lead):.5f} mm")
+    say(
+        f"lead-in at f_c, {a.amplitude:.0f} N: +{gain(lead):.4f} mm, "
+        f"last 20 % +{late_gain(lead):.5f} mm"
+    )
     branch_dir = out / "after_lead_in"
     checkpoint.save(branch_dir, problem, {})
-    branches = {"a: f_r, A": (f_r, a.amplitude), "b: f_c, A": (f_c, a.amplitude),
-                "c: f_c, factor A": (f_c, a.factor * a.amplitude)}
+    branches = {
+        "a: f_r, A": (f_r, a.amplitude),
+        "b: f_c, A": (f_c, a.amplitude),
+        "c: f_c, factor A": (f_c, a.factor * a.amplitude),
+    }
     histories = {}
     for name, (f, amp) in branches.items():
         checkpoint.restore(branch_dir, problem)
         problem.reset_operator()
         histories[name] = h = harmonic_stage(model, f, amp, a.duration)
-        say(f"branch {name:18s} {f:8.2f} Hz {amp:7.0f} N: +{gain(h):.5f} mm, last 20 % "
-            f"+{late_gain(h):.5f} mm ({time.perf_counter() - wall:.0f} s)")
+        say(
+            f"branch {name:18s} {f:8.2f} Hz {amp:7.0f} N: +{gain(h):.5f} mm, last 20 % "
+            f"+{late_gain(h):.5f} mm ({time.perf_counter() - wall:.0f} s)"
+        )
 
     gains = {name: gain(h) for name, h in histories.items()}
     b = max(gains["b: f_c, A"], 0.0)
@@ -170,11 +194,27 @@ def main(argv=None) -> int:
         out.mkdir(parents=True, exist_ok=True)
         with open(out / "scenarios.csv", "w", newline="") as f:
             w = csv.writer(f)
-            w.writerow(["branch", "frequency_Hz", "amplitude_N", "duration_s", "gained_mm",
-                        "last_20_percent_mm"])
+            w.writerow(
+                [
+                    "branch",
+                    "frequency_Hz",
+                    "amplitude_N",
+                    "duration_s",
+                    "gained_mm",
+                    "last_20_percent_mm",
+                ]
+            )
             for name, (freq, amp) in branches.items():
-                w.writerow([name, f"{freq:.4f}", f"{amp:.1f}", a.duration, f"{gains[name]:.6g}",
-                            f"{late_gain(histories[name]):.6g}"])
+                w.writerow(
+                    [
+                        name,
+                        f"{freq:.4f}",
+                        f"{amp:.1f}",
+                        a.duration,
+                        f"{gains[name]:.6g}",
+                        f"{late_gain(histories[name]):.6g}",
+                    ]
+                )
     return 0
 
 

@@ -33,20 +33,33 @@ def self_weight(comm: MPI.Comm, case: InstallationCase) -> dict:
     t0 = time.perf_counter()
     model = set_up_joint_model(comm, case)
     sw = case.self_weight
-    rows = run(model.problem, sw.duration_s, sw.dt_s, dt_min=sw.dt_s * case.time.dt_min_fraction,
-               observers=[model.settlement], progress=False)
+    rows = run(
+        model.problem,
+        sw.duration_s,
+        sw.dt_s,
+        dt_min=sw.dt_s * case.time.dt_min_fraction,
+        observers=[model.settlement],
+        progress=False,
+    )
     t = np.array([r["time_s"] for r in rows])
     s = np.array([r["settlement_mm"] for r in rows])
     events = slip_episodes(t, s, 0.0, 0.0, 1, case.output.slip_rate_mm_s)
-    return {"wall_s": time.perf_counter() - t0, "steps": len(rows),
-            "newton": sum(r["newton_iterations"] for r in rows) / len(rows),
-            "ramp_mm": float(np.interp(sw.ramp_time_s, t, s)), "end_mm": float(s[-1]), "events": events}
+    return {
+        "wall_s": time.perf_counter() - t0,
+        "steps": len(rows),
+        "newton": sum(r["newton_iterations"] for r in rows) / len(rows),
+        "ramp_mm": float(np.interp(sw.ramp_time_s, t, s)),
+        "end_mm": float(s[-1]),
+        "events": events,
+    }
 
 
 def main(argv=None) -> int:
     p = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     p.add_argument("--case", default="scaled", help="case file or preset name in cases/")
-    p.add_argument("--set", action="append", default=[], metavar="TABLE.KEY=VALUE", help="case override")
+    p.add_argument(
+        "--set", action="append", default=[], metavar="TABLE.KEY=VALUE", help="case override"
+    )
     a = p.parse_args(argv)
     comm = MPI.COMM_WORLD
     say = print if comm.rank == 0 else (lambda *args, **kw: None)
@@ -55,16 +68,21 @@ def main(argv=None) -> int:
     results = {}
     for name, case in (("self-weight scheme", own), ("vibration scheme", vibration)):
         r = results[name] = self_weight(comm, case)
-        say(f"{name} ({case.self_weight_scheme()}): {r['steps']} steps in {r['wall_s']:.1f} s, Newton "
+        say(
+            f"{name} ({case.self_weight_scheme()}): {r['steps']} steps in {r['wall_s']:.1f} s, Newton "
             f"{r['newton']:.2f}/step; settlement {r['ramp_mm']:.4f} mm at the end of the ramp, {r['end_mm']:.4f} mm "
             f"at the end; {len(r['events'])} stick-slip events of "
-            f"{', '.join(f'{1e3 * e:.1f}' for e in r['events'])} um", flush=True)
+            f"{', '.join(f'{1e3 * e:.1f}' for e in r['events'])} um",
+            flush=True,
+        )
     a_, b_ = results["self-weight scheme"], results["vibration scheme"]
-    say(f"difference (self-weight scheme against vibration scheme): settlement at the end "
+    say(
+        f"difference (self-weight scheme against vibration scheme): settlement at the end "
         f"{100 * (a_['end_mm'] / b_['end_mm'] - 1):+.2f} %, at the end of the ramp "
         f"{100 * (a_['ramp_mm'] / b_['ramp_mm'] - 1):+.2f} %, events {len(a_['events'])} against "
         f"{len(b_['events'])}, largest event {1e3 * max(a_['events'], default=0):.1f} against "
-        f"{1e3 * max(b_['events'], default=0):.1f} um; wall time {a_['wall_s']:.0f} against {b_['wall_s']:.0f} s")
+        f"{1e3 * max(b_['events'], default=0):.1f} um; wall time {a_['wall_s']:.0f} against {b_['wall_s']:.0f} s"
+    )
     return 0
 
 

@@ -38,7 +38,9 @@ def resolve_case_path(name: str | Path) -> Path:
     preset = CASES_DIR / f"{path.stem}.toml"
     if preset.is_file():
         return preset
-    raise ValueError(f"case file {str(name)!r} not found (and no preset of that name; presets: {presets()})")
+    raise ValueError(
+        f"case file {str(name)!r} not found (and no preset of that name; presets: {presets()})"
+    )
 
 
 def _parent_path(child: Path, parent: Any) -> Path:
@@ -51,8 +53,10 @@ def _parent_path(child: Path, parent: Any) -> Path:
     try:
         return resolve_case_path(parent)
     except ValueError:
-        raise ValueError(f"{child}: extends {parent!r}, which is neither a file beside it nor a preset "
-                         f"(presets: {presets()})") from None
+        raise ValueError(
+            f"{child}: extends {parent!r}, which is neither a file beside it nor a preset "
+            f"(presets: {presets()})"
+        ) from None
 
 
 def merge(base: dict[str, Any], over: dict[str, Any]) -> dict[str, Any]:
@@ -83,7 +87,9 @@ def _load(path: Path, chain: tuple[Path, ...] = ()) -> dict[str, Any]:
     return merge(_load(parent, (*chain, resolved)), data)
 
 
-def read_case(name: str | Path = DEFAULT_CASE, overrides: list[str] | None = None) -> dict[str, Any]:
+def read_case(
+    name: str | Path = DEFAULT_CASE, overrides: list[str] | None = None
+) -> dict[str, Any]:
     """Read a TOML case file (resolving ``extends``) and apply ``key.path=value`` overrides."""
     path = resolve_case_path(name)
     case = _load(path)
@@ -116,7 +122,9 @@ def construct(cls: type, data: dict[str, Any], name: str) -> Any:
     known = {f.name for f in fields(cls)}
     unknown = set(data) - known
     if unknown:
-        raise ValueError(f"[{name}] has unknown key(s) {sorted(unknown)}; expected some of {sorted(known)}")
+        raise ValueError(
+            f"[{name}] has unknown key(s) {sorted(unknown)}; expected some of {sorted(known)}"
+        )
     try:
         return cls(**copy.deepcopy(data))
     except TypeError as e:  # missing required keys or wrong types

@@ -11,7 +11,8 @@ modes.csv, frequencies.csv, plots, summary.txt).
 
 Without options: cases/dismount.toml (the very coarse frictional joint of the demos/install.py
 default run, 8 around, 0.25 m, with the contact settings with which the frictional Newton
-solve converges; ranked frequencies up to 700 Hz), short stages. After the self-weight stage alone this joint is held by a contact normal force of
+solve converges; ranked frequencies up to 700 Hz), short stages. After the self-weight stage
+alone this joint is held by a contact normal force of
 about 19 kN, so its rigid Coulomb pull-out force N (mu cos(alpha) - sin(alpha)) is 7.4-9.4 kN
 (printed): the default pull of 6 kN lies below it, a pull in SPEC 3's rig range (10-40 kN,
 e.g. --pull 20e3) frees this joint without vibration. --quick: --case dismount_quick (the tiny
@@ -49,36 +50,54 @@ QUICK_PLAN = {"ramp_s": 0.004, "hold_s": 0.012, "stage_duration_s": 0.004, "n_fr
 
 def main(argv: list[str] | None = None) -> int:
     p = cli.parser(__doc__.splitlines()[0], "output/dismount", DEFAULT_CASE, QUICK_CASE)
-    p.add_argument("--pull", type=float, default=6e3,
-                   help="upward pulling force [N] (6 kN; SPEC 3 rig: 10-40 kN)")
-    p.add_argument("--pull-ramp", type=float,
-                   help="ramp from the self-weight force to the pull [s] (0.05)")
+    p.add_argument(
+        "--pull",
+        type=float,
+        default=6e3,
+        help="upward pulling force [N] (6 kN; SPEC 3 rig: 10-40 kN)",
+    )
+    p.add_argument(
+        "--pull-ramp", type=float, help="ramp from the self-weight force to the pull [s] (0.05)"
+    )
     p.add_argument("--pull-hold", type=float, help="pull alone, held [s] (0.05)")
-    p.add_argument("--install-stages", type=int, default=0,
-                   help="vibration stages at the ranked frequencies before pulling (0)")
+    p.add_argument(
+        "--install-stages",
+        type=int,
+        default=0,
+        help="vibration stages at the ranked frequencies before pulling (0)",
+    )
     p.add_argument("--n-frequencies", type=int, help="pull + vibration stages at ranked 1..n (2)")
     p.add_argument("--stage-duration", type=float, help="each vibration stage [s] (0.03)")
     p.add_argument("--amplitude", type=float, default=3600.0, help="vibration force amplitude [N]")
     args = p.parse_args(argv)
     comm = MPI.COMM_WORLD
     log = cli.say(comm)
-    given = {"ramp_s": args.pull_ramp, "hold_s": args.pull_hold,
-             "stage_duration_s": args.stage_duration, "n_frequencies": args.n_frequencies}
+    given = {
+        "ramp_s": args.pull_ramp,
+        "hold_s": args.pull_hold,
+        "stage_duration_s": args.stage_duration,
+        "n_frequencies": args.n_frequencies,
+    }
     base = QUICK_PLAN if args.quick else {"stage_duration_s": 0.03, "n_frequencies": 2}
     try:
-        plan = DismountPlan(pull_N=args.pull, n_install=args.install_stages,
-                            amplitude_N=args.amplitude,
-                            **{**base, **{k: v for k, v in given.items() if v is not None}})
+        plan = DismountPlan(
+            pull_N=args.pull,
+            n_install=args.install_stages,
+            amplitude_N=args.amplitude,
+            **{**base, **{k: v for k, v in given.items() if v is not None}},
+        )
         case = cli.load_case(args, edit=lambda data: dismount_case(data, plan))
         cli.prepare_output(comm, args.output)
     except ValueError as e:
         return cli.fail(comm, str(e))
-    log(f"dismount: {-case.self_weight.force_N / 1e3:.1f} kN self-weight, {plan.n_install} "
+    log(
+        f"dismount: {-case.self_weight.force_N / 1e3:.1f} kN self-weight, {plan.n_install} "
         f"installation stage(s), pull {plan.pull_N / 1e3:.1f} kN up (ramp {plan.ramp_s} s, "
         f"alone {plan.hold_s} s), "
         f"then {plan.n_frequencies} stage(s) of pull + {plan.amplitude_N:.0f} N at the ranked "
         f"frequencies, {plan.stage_duration_s} s each"
-        + (" [--quick: tiny joint, very short stages, a smoke run]" if args.quick else ""))
+        + (" [--quick: tiny joint, very short stages, a smoke run]" if args.quick else "")
+    )
     runner, code = cli.run(comm, case, args.output, progress=not args.no_progress)
     if runner.model is None or len(runner.stages) < 2:
         return code
@@ -88,23 +107,34 @@ def main(argv: list[str] | None = None) -> int:
     plot_dismount(runner.history, table, out / "dismount.png", comm)
     installed = [r for r in runner.history if r["stage"] == plan.n_install][-1]
     normal, alpha = installed["normal_force_N"], case.joint.mp.half_angle
-    low, high = (pull_out_force(normal, mu, alpha)
-                 for mu in (case.friction.mu_d, case.friction.mu_s))
-    log(f"\ninstalled state: settlement {installed['settlement_mm']:.4f} mm, contact normal force "
+    low, high = (
+        pull_out_force(normal, mu, alpha) for mu in (case.friction.mu_d, case.friction.mu_s)
+    )
+    log(
+        f"\ninstalled state: settlement {installed['settlement_mm']:.4f} mm, contact normal force "
         f"{normal / 1e3:.2f} kN; rigid Coulomb pull-out estimate N (mu cos(alpha) - sin(alpha)) "
-        f"= {low / 1e3:.2f} kN (mu_d) .. {high / 1e3:.2f} kN (mu_s)")
+        f"= {low / 1e3:.2f} kN (mu_d) .. {high / 1e3:.2f} kN (mu_s)"
+    )
     log("dismount (axial motion: + = the TP moved up)")
     for row in table:
         f = f"{row['frequency_Hz']:7.2f} Hz" if row["frequency_Hz"] else "    --    "
-        log(f"  {row['role']:>16} {f}  static force {row['static_force_end_N'] / 1e3:+7.2f} kN  "
+        log(
+            f"  {row['role']:>16} {f}  static force {row['static_force_end_N'] / 1e3:+7.2f} kN  "
             f"axial motion {row['axial_motion_mm']:+9.4f} mm  normal force "
             f"{row['normal_force_end_N'] / 1e3:8.3f} kN  "
-            f"{'SEPARATED' if row['separated'] else 'held'}")
+            f"{'SEPARATED' if row['separated'] else 'held'}"
+        )
     first = next((r for r in table if r["separated"]), None)
-    log("result: " + (f"the TP separated in the '{first['role']}' stage"
-                      + (f" at {first['frequency_Hz']:.2f} Hz" if first["frequency_Hz"] else "")
-                      if first else "the TP did not separate")
-        + f"; outputs in {out}")
+    log(
+        "result: "
+        + (
+            f"the TP separated in the '{first['role']}' stage"
+            + (f" at {first['frequency_Hz']:.2f} Hz" if first["frequency_Hz"] else "")
+            if first
+            else "the TP did not separate"
+        )
+        + f"; outputs in {out}"
+    )
     return code
 
 

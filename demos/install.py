@@ -33,12 +33,20 @@ FULL_CASE = "scaled"
 
 
 def parse(argv: list[str] | None) -> argparse.Namespace:
-    p = cli.parser(__doc__.splitlines()[0], "output/install", DEFAULT_CASE, QUICK_CASE, named=cli.NAMED)
-    p.add_argument("--full", action="store_true",
-                   help=f"--case {FULL_CASE}: the case file's discretisation and stage durations "
-                   "(without the default run's cost reductions)")
-    p.add_argument("--resume", action="store_true",
-                   help="continue from the last checkpoint in --output (the same case only)")
+    p = cli.parser(
+        __doc__.splitlines()[0], "output/install", DEFAULT_CASE, QUICK_CASE, named=cli.NAMED
+    )
+    p.add_argument(
+        "--full",
+        action="store_true",
+        help=f"--case {FULL_CASE}: the case file's discretisation and stage durations "
+        "(without the default run's cost reductions)",
+    )
+    p.add_argument(
+        "--resume",
+        action="store_true",
+        help="continue from the last checkpoint in --output (the same case only)",
+    )
     return p.parse_args(argv)
 
 
@@ -48,7 +56,9 @@ def main(argv: list[str] | None = None) -> int:
     try:
         if args.full:
             if args.case is not None or args.quick:
-                raise ValueError(f"--full is --case {FULL_CASE}; it cannot be combined with --case or --quick")
+                raise ValueError(
+                    f"--full is --case {FULL_CASE}; it cannot be combined with --case or --quick"
+                )
             args.case = FULL_CASE
         case = cli.load_case(args)
         cli.prepare_output(comm, args.output)
@@ -61,8 +71,11 @@ def main(argv: list[str] | None = None) -> int:
         return cli.fail(comm, str(e))
     except RuntimeError as e:  # the time loop gave up (Newton failed at the minimum step)
         if comm.rank == 0:
-            print(f"\nrun stopped: {e}\nresults up to this point are in {args.output} "
-                  "(history.csv, stages.csv)", file=sys.stderr)
+            print(
+                f"\nrun stopped: {e}\nresults up to this point are in {args.output} "
+                "(history.csv, stages.csv)",
+                file=sys.stderr,
+            )
         return 1
     return 0
 

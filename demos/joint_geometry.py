@@ -93,7 +93,9 @@ def main(argv: list[str] | None = None) -> int:
     except ValueError as e:
         return cli.fail(comm, str(e))
 
-    log(f"slip-joint geometry of {cli.case_name(args)} ({comm.size} rank(s)); SI input, printed in mm / kg")
+    log(
+        f"slip-joint geometry of {cli.case_name(args)} ({comm.size} rank(s)); SI input, printed in mm / kg"
+    )
     for line in summary(joint, material):
         log(line)
 

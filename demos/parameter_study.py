@@ -42,9 +42,13 @@ QUICK_CASE = "parameter_study_quick"
 
 def main(argv: list[str] | None = None) -> int:
     p = cli.parser(__doc__.splitlines()[0], "output/parameter_study", DEFAULT_CASE, QUICK_CASE)
-    p.add_argument("--variants", nargs="+", metavar="NAME",
-                   help="run only these variants besides the base case "
-                   "(low_friction, slow_decay, modal_damping, fine_mesh)")
+    p.add_argument(
+        "--variants",
+        nargs="+",
+        metavar="NAME",
+        help="run only these variants besides the base case "
+        "(low_friction, slow_decay, modal_damping, fine_mesh)",
+    )
     args = p.parse_args(argv)
     comm = MPI.COMM_WORLD
     log = cli.say(comm)
@@ -58,16 +62,19 @@ def main(argv: list[str] | None = None) -> int:
     except ValueError as e:
         return cli.fail(comm, str(e))
     out = Path(args.output)
-    log(f"parameter study: {len(study)} runs ({', '.join(v.name for v in study)}) into {out}/<name>"
-        + (" [--quick: tiny joint, one 2 ms stage, a smoke run]" if args.quick else ""))
+    log(
+        f"parameter study: {len(study)} runs ({', '.join(v.name for v in study)}) into {out}/<name>"
+        + (" [--quick: tiny joint, one 2 ms stage, a smoke run]" if args.quick else "")
+    )
     rows: list[dict] = []
     code = 0
     for k, (variant, case) in enumerate(zip(study, cases)):
         log(f"\n[{k + 1}/{len(study)}] {variant.name}: {variant.parameter} = {variant.value}")
         wall = time.perf_counter()
         try:
-            runner, status_code = cli.run(comm, case, out / variant.name,
-                                               progress=not args.no_progress, log=lambda s: None)
+            runner, status_code = cli.run(
+                comm, case, out / variant.name, progress=not args.no_progress, log=lambda s: None
+            )
             status = "done" if status_code == 0 else "stopped"
         except ValueError as e:  # e.g. modal damping: time step above its stability limit
             log(f"  not run: {e}")
@@ -78,8 +85,10 @@ def main(argv: list[str] | None = None) -> int:
             new = summary_rows(variant, runner.stages, runner.excitations, status)
             rows += new
             for r in new:
-                log(f"  {r['name']:>12} {r['role']:>11} {r['frequency_Hz']:8.2f} Hz: "
-                    f"gained {r['gained_mm']:+.4f} mm, settlement {r['settlement_end_mm']:.4f} mm")
+                log(
+                    f"  {r['name']:>12} {r['role']:>11} {r['frequency_Hz']:8.2f} Hz: "
+                    f"gained {r['gained_mm']:+.4f} mm, settlement {r['settlement_end_mm']:.4f} mm"
+                )
         log(f"  {status} in {time.perf_counter() - wall:.1f} s")
         write_csv(out / "summary.csv", SUMMARY_COLUMNS, rows, comm)
         plot_parameter_study(rows, out / "summary.png", comm)

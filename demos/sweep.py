@@ -52,11 +52,13 @@ QUICK_SWEEPS = {
 def sweep_stages(kind: str, values: dict[str, float], amplitude: float | str) -> list[dict]:
     """The sweep as [[schedule]] tables."""
     if kind == "steps":
-        stages = frequency_steps(values["f_start"], values["f_stop"], values["f_step"],
-                                 values["dwell"], amplitude)
+        stages = frequency_steps(
+            values["f_start"], values["f_stop"], values["f_step"], values["dwell"], amplitude
+        )
     else:
-        stages = frequency_ramp(values["f_start"], values["f_stop"], values["ramp_duration"],
-                                amplitude)
+        stages = frequency_ramp(
+            values["f_start"], values["f_stop"], values["ramp_duration"], amplitude
+        )
     return [{k: v for k, v in asdict(s).items() if v is not None} for s in stages]
 
 
@@ -71,17 +73,20 @@ def amplitude_value(text: str) -> float | str:
 
 def main(argv: list[str] | None = None) -> int:
     p = cli.parser(__doc__.splitlines()[0], "output/sweep", DEFAULT_CASE, QUICK_CASE)
-    p.add_argument("--sweep", choices=list(SWEEPS), default="steps",
-                   help="step-wise increase or linear ramp")
+    p.add_argument(
+        "--sweep", choices=list(SWEEPS), default="steps", help="step-wise increase or linear ramp"
+    )
     p.add_argument("--f-start", type=float, help="first frequency [Hz] (steps 10, ramp 0)")
     p.add_argument("--f-stop", type=float, help="last frequency [Hz] (steps 130, ramp 125)")
     p.add_argument("--f-step", type=float, help="steps: frequency step [Hz] (10)")
     p.add_argument("--dwell", type=float, help="steps: duration of each step [s] (0.03; SPEC 0.5)")
     p.add_argument("--ramp-duration", type=float, help="ramp: duration [s] (1; SPEC 13-200)")
-    p.add_argument("--amplitude", default="eccentric",
-                   help="'eccentric' (0.3632 f^2 N) or a force [N]")
-    p.add_argument("--no-modal", action="store_true",
-                   help="skip the modal stage (no natural frequencies)")
+    p.add_argument(
+        "--amplitude", default="eccentric", help="'eccentric' (0.3632 f^2 N) or a force [N]"
+    )
+    p.add_argument(
+        "--no-modal", action="store_true", help="skip the modal stage (no natural frequencies)"
+    )
     args = p.parse_args(argv)
     comm = MPI.COMM_WORLD
     log = cli.say(comm)
@@ -90,8 +95,11 @@ def main(argv: list[str] | None = None) -> int:
         given = getattr(args, key)
         if given is not None:
             values[key] = given
-    wrong = [k for k in ("f_step", "dwell", "ramp_duration")
-             if getattr(args, k) is not None and k not in values]
+    wrong = [
+        k
+        for k in ("f_step", "dwell", "ramp_duration")
+        if getattr(args, k) is not None and k not in values
+    ]
     after = ["vibration.modal_stage=false"] if args.no_modal else []
     try:
         if wrong:
@@ -106,12 +114,17 @@ def main(argv: list[str] | None = None) -> int:
         cli.prepare_output(comm, args.output)
     except ValueError as e:
         return cli.fail(comm, str(e))
-    what = (f"{values['f_start']:g} -> {values['f_stop']:g} Hz in {values['f_step']:g} Hz steps of "
-            f"{values['dwell']:g} s ({len(stages)} steps)" if args.sweep == "steps" else
-            f"linear ramp {values['f_start']:g} -> {values['f_stop']:g} Hz over "
-            f"{values['ramp_duration']:g} s")
-    log(f"sweep: {what}, amplitude {args.amplitude}"
-        + (" [--quick: tiny joint, very short stages, a smoke run]" if args.quick else ""))
+    what = (
+        f"{values['f_start']:g} -> {values['f_stop']:g} Hz in {values['f_step']:g} Hz steps of "
+        f"{values['dwell']:g} s ({len(stages)} steps)"
+        if args.sweep == "steps"
+        else f"linear ramp {values['f_start']:g} -> {values['f_stop']:g} Hz over "
+        f"{values['ramp_duration']:g} s"
+    )
+    log(
+        f"sweep: {what}, amplitude {args.amplitude}"
+        + (" [--quick: tiny joint, very short stages, a smoke run]" if args.quick else "")
+    )
     runner, code = cli.run(comm, case, args.output, progress=not args.no_progress)
     if runner.model is None or len(runner.stages) < 2:
         return code
@@ -119,12 +132,16 @@ def main(argv: list[str] | None = None) -> int:
     rows = report.sweep_rows(runner.history)
     write_csv(out / "sweep.csv", report.SWEEP_COLUMNS, rows, comm)
     plot_sweep(rows, runner.stages, runner.natural_frequencies, out / "sweep.png", comm)
-    log(f"\nsweep: settlement gained {rows[-1]['settlement_gain_mm']:+.4f} mm over "
-        f"{rows[-1]['time_s'] - runner.stages[1]['start_s']:.4g} s")
+    log(
+        f"\nsweep: settlement gained {rows[-1]['settlement_gain_mm']:+.4f} mm over "
+        f"{rows[-1]['time_s'] - runner.stages[1]['start_s']:.4g} s"
+    )
     if args.sweep == "steps":
         for s in runner.stages[1:]:
-            log(f"  {s['frequency_Hz']:7.2f} Hz  {s['amplitude_N']:8.0f} N  "
-                f"gained {s['gained_mm']:+.4f} mm")
+            log(
+                f"  {s['frequency_Hz']:7.2f} Hz  {s['amplitude_N']:8.0f} N  "
+                f"gained {s['gained_mm']:+.4f} mm"
+            )
     log(f"outputs in {out}: sweep.csv, sweep.png, history.csv, stages.csv")
     return code
 
@@ -132,8 +149,11 @@ def main(argv: list[str] | None = None) -> int:
 def _direction(data: dict) -> dict:
     """The case's [vibration] direction settings for the generated stages."""
     vib = data.get("vibration", {})
-    keys = {"direction": "direction", "lateral_fraction": "lateral_fraction",
-            "angle_deg": "lateral_angle_deg"}
+    keys = {
+        "direction": "direction",
+        "lateral_fraction": "lateral_fraction",
+        "angle_deg": "lateral_angle_deg",
+    }
     return {stage_key: vib[key] for key, stage_key in keys.items() if key in vib}
 
 

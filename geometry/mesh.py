@@ -107,7 +107,9 @@ def _add_part(
             geo.mesh.setTransfiniteSurface(surface)
             geo.mesh.setRecombine(2, surface)
             profile.append(surface)
-            is_contact.append(in_zone if zone is not None else part.cone_bottom_z <= mid <= part.cone_top_z)
+            is_contact.append(
+                in_zone if zone is not None else part.cone_bottom_z <= mid <= part.cone_top_z
+            )
             layer_of.append((j, k))
 
     entities = _PartEntities([], [], [], [], [], [], [])
@@ -245,25 +247,32 @@ def sector_partitioner(x: np.ndarray | None) -> Callable:
     """
 
     def partition(comm: MPI.Comm, n_parts: int, cell_types, topology):
-        vertices = [np.asarray(t).reshape(-1, dolfinx.cpp.mesh.cell_num_vertices(c))
-                    for c, t in zip(cell_types, topology)]
+        vertices = [
+            np.asarray(t).reshape(-1, dolfinx.cpp.mesh.cell_num_vertices(c))
+            for c, t in zip(cell_types, topology)
+        ]
         destination = []
         for v in vertices:
             centre = x[v].mean(axis=1) if len(v) else np.zeros((0, 3))
             angle = np.arctan2(centre[:, 1], centre[:, 0]) + np.pi  # [0, 2 pi]
-            destination.append(np.minimum((angle * n_parts / (2 * np.pi)).astype(np.int32), n_parts - 1))
+            destination.append(
+                np.minimum((angle * n_parts / (2 * np.pi)).astype(np.int32), n_parts - 1)
+            )
         return dolfinx.graph.adjacencylist(np.concatenate(destination).reshape(-1, 1))._cpp_object
 
     return partition
 
 
-def _to_dolfinx(comm: MPI.Comm, build: Callable[[], None], name: str,
-                options: MeshOptions) -> dolfinx.io.gmsh.MeshData:
+def _to_dolfinx(
+    comm: MPI.Comm, build: Callable[[], None], name: str, options: MeshOptions
+) -> dolfinx.io.gmsh.MeshData:
     """Run ``build`` on rank 0 in a fresh gmsh model and distribute the mesh (``options.partition``)."""
     partition = options.partition
     if partition == "sectors" and comm.size > options.n_circumferential // 2:
-        raise ValueError(f"{comm.size} ranks for {options.n_circumferential} elements around: sectors would be "
-                         "less than 2 elements wide; use [mesh] partition = \"graph\"")
+        raise ValueError(
+            f"{comm.size} ranks for {options.n_circumferential} elements around: sectors would be "
+            'less than 2 elements wide; use [mesh] partition = "graph"'
+        )
     rank = 0
     started = False
     x = None
@@ -283,7 +292,9 @@ def _to_dolfinx(comm: MPI.Comm, build: Callable[[], None], name: str,
         if partition == "sectors":
             x = dolfinx.io.gmsh.extract_geometry(gmsh.model)
     partitioner = sector_partitioner(x) if partition == "sectors" and comm.size > 1 else None
-    mesh_data = dolfinx.io.gmsh.model_to_mesh(gmsh.model, comm, rank, gdim=3, partitioner=partitioner)
+    mesh_data = dolfinx.io.gmsh.model_to_mesh(
+        gmsh.model, comm, rank, gdim=3, partitioner=partitioner
+    )
     if comm.rank == rank:
         gmsh.model.remove()
         if started:

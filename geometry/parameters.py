@@ -329,7 +329,11 @@ class MeshOptions:
 
     def n_axial(self, length: float, in_contact_zone: bool = False) -> int:
         """Number of elements along an axial segment of ``length`` m."""
-        size = self.contact_axial_size if in_contact_zone and self.contact_axial_size > 0 else self.axial_size
+        size = (
+            self.contact_axial_size
+            if in_contact_zone and self.contact_axial_size > 0
+            else self.axial_size
+        )
         return max(1, math.ceil(length / size - 1e-9))
 
 

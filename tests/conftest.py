@@ -20,7 +20,11 @@ DEMOS = Path(__file__).resolve().parents[1] / "demos"
 
 
 def pytest_addoption(parser):
-    parser.addoption("--slow", action="store_true", help="also run the tests marked slow (minutes to an hour each)")
+    parser.addoption(
+        "--slow",
+        action="store_true",
+        help="also run the tests marked slow (minutes to an hour each)",
+    )
 
 
 def pytest_collection_modifyitems(config, items):
@@ -48,7 +52,9 @@ def shared_dir(tmp_path_factory):
 
     def make(name: str) -> Path:
         comm = MPI.COMM_WORLD
-        return Path(comm.bcast(str(tmp_path_factory.mktemp(name)) if comm.rank == 0 else None, root=0))
+        return Path(
+            comm.bcast(str(tmp_path_factory.mktemp(name)) if comm.rank == 0 else None, root=0)
+        )
 
     return make
 

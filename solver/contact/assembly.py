@@ -39,11 +39,15 @@ def grouped_products(key: npt.NDArray, L: npt.NDArray, R: npt.NDArray):
     Rp = np.zeros(shape + R.shape[2:])
     Lp[group, position] = L[order]
     Rp[group, position] = R[order]
-    K = Lp.reshape(len(starts), -1, L.shape[2]).transpose(0, 2, 1) @ Rp.reshape(len(starts), -1, R.shape[2])
+    K = Lp.reshape(len(starts), -1, L.shape[2]).transpose(0, 2, 1) @ Rp.reshape(
+        len(starts), -1, R.shape[2]
+    )
     return order[starts], K
 
 
-def assemble_point_vector(b: PETSc.Vec, size: int, rows: list[npt.NDArray], vals: list[npt.NDArray]) -> None:
+def assemble_point_vector(
+    b: PETSc.Vec, size: int, rows: list[npt.NDArray], vals: list[npt.NDArray]
+) -> None:
     """Fill the ghosted PETSc vector ``b`` (``dolfinx.fem.petsc.create_vector`` of the space)
     with the values ``vals`` summed into the global rows ``rows`` (lists of arrays, one pair per
     chunk of points); ``size``: global length."""
@@ -52,8 +56,11 @@ def assemble_point_vector(b: PETSc.Vec, size: int, rows: list[npt.NDArray], vals
     if rows:
         rows, vals = np.concatenate(rows), np.concatenate(vals)
         touched = np.flatnonzero(np.bincount(rows, minlength=size))
-        b.setValues(touched.astype(PETSc.IntType), np.bincount(rows, vals, minlength=size)[touched],
-                    addv=PETSc.InsertMode.ADD_VALUES)
+        b.setValues(
+            touched.astype(PETSc.IntType),
+            np.bincount(rows, vals, minlength=size)[touched],
+            addv=PETSc.InsertMode.ADD_VALUES,
+        )
     b.assemblyBegin()
     b.assemblyEnd()
 
@@ -74,10 +81,15 @@ class PointMatrices:
         self.comm, self.sizes = comm, sizes
         self._cached: dict[str, tuple] = {}
 
-    def assemble(self, blocks: list[npt.NDArray], vals: npt.NDArray, cache: str | None = None) -> PETSc.Mat:
+    def assemble(
+        self, blocks: list[npt.NDArray], vals: npt.NDArray, cache: str | None = None
+    ) -> PETSc.Mat:
         cached = self._cached.get(cache)
-        same = cached is not None and len(cached[0]) == len(blocks) and all(
-            np.array_equal(a, b) for a, b in zip(cached[0], blocks))
+        same = (
+            cached is not None
+            and len(cached[0]) == len(blocks)
+            and all(np.array_equal(a, b) for a, b in zip(cached[0], blocks))
+        )
         if self.comm.allreduce(same, op=MPI.LAND):  # the COO preallocation is collective
             A = cached[1]
         else:

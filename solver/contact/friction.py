@@ -20,7 +20,9 @@ class FrictionLaw:
 
     def __post_init__(self) -> None:
         if not (self.mu_s >= 0 and self.mu_d >= 0):
-            raise ValueError(f"friction coefficients must be >= 0, got mu_s={self.mu_s}, mu_d={self.mu_d}")
+            raise ValueError(
+                f"friction coefficients must be >= 0, got mu_s={self.mu_s}, mu_d={self.mu_d}"
+            )
         if self.mu_d > self.mu_s:
             raise ValueError(f"mu_d ({self.mu_d}) must not exceed mu_s ({self.mu_s})")
         if self.d_c < 0:

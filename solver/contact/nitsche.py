@@ -86,7 +86,9 @@ class NitscheContact:
         chunk: int = 500,
     ):
         if theta not in (1, 0, -1):
-            raise ValueError(f"theta must be 1 (symmetric), 0 (non-symmetric) or -1 (skew), got {theta}")
+            raise ValueError(
+                f"theta must be 1 (symmetric), 0 (non-symmetric) or -1 (skew), got {theta}"
+            )
         if not gamma0 > 0:
             raise ValueError(f"Nitsche parameter gamma0 must be positive, got {gamma0}")
         if slave_tag == master_tag:
@@ -108,9 +110,13 @@ class NitscheContact:
         #: local cells with a slave or master facet: the only cells whose dofs r_c and J_c involve
         self.support_cells = np.unique(np.concatenate([self.slave.cells, self.master.cells]))
         imap = V.dofmap.index_map
-        self._slave_blocks = imap.local_to_global(self.slave.dofs.ravel()).reshape(self.slave.dofs.shape)
+        self._slave_blocks = imap.local_to_global(self.slave.dofs.ravel()).reshape(
+            self.slave.dofs.shape
+        )
         self._sizes = (imap.size_local * 3, imap.size_global * 3)
-        self._matrices = PointMatrices(V.mesh.comm, self._sizes)  # the Jacobian's COO pattern cached
+        self._matrices = PointMatrices(
+            V.mesh.comm, self._sizes
+        )  # the Jacobian's COO pattern cached
         self._residual = dolfinx.fem.petsc.create_vector(V)  # returned by residual()
         u0 = dolfinx.fem.Function(V)
         self.dt: float | None = None
@@ -127,10 +133,13 @@ class NitscheContact:
         (static coefficient mu_s).
         """
         if dt is not None and not dt > 0:
-            raise ValueError(f"time step dt must be positive (or None for rate-free steps), got {dt}")
+            raise ValueError(
+                f"time step dt must be positive (or None for rate-free steps), got {dt}"
+            )
         self.dt = dt
         self._speed_old = (
-            np.linalg.norm(self.state.slip_velocity, axis=1) if self.state is not None
+            np.linalg.norm(self.state.slip_velocity, axis=1)
+            if self.state is not None
             else np.zeros(self.slave.num_points)
         )
         self._u_old_slave = self.slave.displacement(u_old)
@@ -156,7 +165,9 @@ class NitscheContact:
         grad_u = self._u_slave_nodes.transpose(0, 2, 1) @ slave.gradients
         eps = 0.5 * (grad_u + grad_u.transpose(0, 2, 1))
         mat = self.material
-        sig = 2 * mat.mu * eps + mat.lmbda * np.trace(eps, axis1=1, axis2=2)[:, None, None] * np.eye(gdim)
+        sig = 2 * mat.mu * eps + mat.lmbda * np.trace(eps, axis1=1, axis2=2)[
+            :, None, None
+        ] * np.eye(gdim)
         traction = np.einsum("pij,pj->pi", sig, n)
         sigma_n = np.einsum("pi,pi->p", traction, n)
         sigma_t = traction - sigma_n[:, None] * n
@@ -251,8 +262,10 @@ class NitscheContact:
         n = self._n[idx]
         g = self.slave.gradients[idx]  # (q, ns, 3)
         gn = g @ n[:, :, None]  # (q, ns, 1)
-        T = mat.mu * (gn[:, None, :, :] * np.eye(gdim)[None, :, None, :]
-                      + g.transpose(0, 2, 1)[:, :, :, None] * n[:, None, None, :])
+        T = mat.mu * (
+            gn[:, None, :, :] * np.eye(gdim)[None, :, None, :]
+            + g.transpose(0, 2, 1)[:, :, :, None] * n[:, None, None, :]
+        )
         T += mat.lmbda * n[:, :, None, None] * g[:, None, :, :]
         return T.reshape(len(idx), gdim, -1)
 
@@ -261,11 +274,15 @@ class NitscheContact:
         gdim = self.slave.gdim
         phi, psi = self.slave.values[idx], self.pairing.master_values[idx]
         basis = np.concatenate([phi, -psi], axis=1)  # (q, ns + nm)
-        return (basis[:, None, :, None] * np.eye(gdim)[None, :, None, :]).reshape(len(idx), gdim, -1)
+        return (basis[:, None, :, None] * np.eye(gdim)[None, :, None, :]).reshape(
+            len(idx), gdim, -1
+        )
 
     def _global_dofs(self, idx: npt.NDArray) -> npt.NDArray:
         gdim = self.slave.gdim
-        blocks = np.concatenate([self._slave_blocks[idx], self.master.blocks[self.pairing.facet[idx]]], axis=1)
+        blocks = np.concatenate(
+            [self._slave_blocks[idx], self.master.blocks[self.pairing.facet[idx]]], axis=1
+        )
         return (blocks[:, :, None] * gdim + np.arange(gdim)).reshape(len(idx), -1)
 
     def _chunks(self):
@@ -320,7 +337,9 @@ class NitscheContact:
             norm = np.linalg.norm(P_t, axis=1)
             q = P_t / norm[:, None]
             mu, p = self._mu[idx[s]], -self._lam_n[idx[s]]
-            d = (mu * p / norm)[:, None, None] * (Bt[s] - q[:, :, None] * np.einsum("pi,pik->pk", q, Bt[s])[:, None, :])
+            d = (mu * p / norm)[:, None, None] * (
+                Bt[s] - q[:, :, None] * np.einsum("pi,pik->pk", q, Bt[s])[:, None, :]
+            )
             d_radius = -mu[:, None] * Bn[s]
             if self.dt is not None and not self.lagged_friction:
                 # d|v| = e . d(ds) / dt with e = ds/|ds|; |ds| has no derivative at 0, where any unit
@@ -336,8 +355,16 @@ class NitscheContact:
             R[s] += d + q[:, :, None] * d_radius[:, None, :]
         return R
 
-    def _assemble_matrix(self, tied, stick, slip, consistent: bool, theta: int | None = None, gamma=None,
-                         cache: str | None = None) -> PETSc.Mat:
+    def _assemble_matrix(
+        self,
+        tied,
+        stick,
+        slip,
+        consistent: bool,
+        theta: int | None = None,
+        gamma=None,
+        cache: str | None = None,
+    ) -> PETSc.Mat:
         """Assemble sum_q w/gamma (-theta T^T T + [theta T - gamma jump]^T (n dlam_n + dlam_t)).
 
         (-theta T^T T = -theta (Sn Sn + St St), the slave-only Nitsche term, at every paired point;
@@ -367,7 +394,9 @@ class NitscheContact:
             if t.size:
                 it = idx[t]
                 jump = self._jump(it)
-                T_full = np.concatenate([T[t], np.zeros((len(t), gdim, jump.shape[2] - nsd))], axis=2)
+                T_full = np.concatenate(
+                    [T[t], np.zeros((len(t), gdim, jump.shape[2] - nsd))], axis=2
+                )
                 E = T_full - gam[t, None, None] * jump
                 R = self._tangent_rows(it, E, jump, stick[it], slip[it], consistent)
                 F = w[t, None, None] * (th * T_full - gam[t, None, None] * jump)
@@ -381,10 +410,13 @@ class NitscheContact:
     def jacobian(self) -> PETSc.Mat:
         """Generalized-Newton Jacobian of the contact residual at the last update [N/m] (this
         object's matrix, overwritten by the next call: copy it to keep it)."""
-        return self._assemble_matrix(self._active, self._stick, self._slip, consistent=True, cache="jacobian")
+        return self._assemble_matrix(
+            self._active, self._stick, self._slip, consistent=True, cache="jacobian"
+        )
 
-    def interface_stiffness(self, status: npt.NDArray | Status, theta: int | None = None,
-                            gamma0: float | None = None) -> PETSc.Mat:
+    def interface_stiffness(
+        self, status: npt.NDArray | Status, theta: int | None = None, gamma0: float | None = None
+    ) -> PETSc.Mat:
         """Linear interface tangent for a given per-point status (this rank's slave points) [N/m].
 
         STICK ties normal and tangential relative motion, SLIP the normal motion only, OPEN
@@ -398,15 +430,23 @@ class NitscheContact:
         modal analysis while the time stepping uses theta = -1 with a small gamma0.
         """
         if theta is not None and theta not in (1, 0, -1):
-            raise ValueError(f"theta must be 1 (symmetric), 0 (non-symmetric) or -1 (skew), got {theta}")
+            raise ValueError(
+                f"theta must be 1 (symmetric), 0 (non-symmetric) or -1 (skew), got {theta}"
+            )
         if gamma0 is not None and not gamma0 > 0:
             raise ValueError(f"Nitsche parameter gamma0 must be positive, got {gamma0}")
         gamma = None if gamma0 is None else gamma0 * self.material.E / self.slave.h
         status = np.broadcast_to(np.asarray(status, dtype=np.int8), (self.slave.num_points,))
         if not np.isin(status, list(Status)).all():
             raise ValueError("status values must be Status.OPEN, Status.STICK or Status.SLIP")
-        return self._assemble_matrix(status != Status.OPEN, status == Status.STICK, np.zeros(len(status), bool),
-                                     consistent=False, theta=theta, gamma=gamma)
+        return self._assemble_matrix(
+            status != Status.OPEN,
+            status == Status.STICK,
+            np.zeros(len(status), bool),
+            consistent=False,
+            theta=theta,
+            gamma=gamma,
+        )
 
     def residual_floor(self) -> float:
         """Round-off level of the contact residual's l2 norm at the last update [N] (all ranks).
@@ -418,7 +458,11 @@ class NitscheContact:
         that estimate, for use as a floor of Newton's residual tolerance.
         """
         paired = self.pairing.paired
-        scale = self.slave.weights[paired] * self.gamma[paired] * np.linalg.norm(self.state.coordinates[paired], axis=1)
+        scale = (
+            self.slave.weights[paired]
+            * self.gamma[paired]
+            * np.linalg.norm(self.state.coordinates[paired], axis=1)
+        )
         total = self.V.mesh.comm.allreduce(float(scale @ scale), op=MPI.SUM)
         return 10.0 * np.finfo(float).eps * np.sqrt(total)
 

@@ -24,8 +24,15 @@ from solver.contact.surfaces import MasterSurface, clip_to_facet
 __all__ = ["Pairing", "pair"]
 
 
-def _closest_on_facets(x: npt.NDArray, facet: npt.NDArray, s: npt.NDArray, master: MasterSurface,
-                       facet_disp: npt.NDArray, max_iterations: int, tol: float) -> tuple[npt.NDArray, npt.NDArray]:
+def _closest_on_facets(
+    x: npt.NDArray,
+    facet: npt.NDArray,
+    s: npt.NDArray,
+    master: MasterSurface,
+    facet_disp: npt.NDArray,
+    max_iterations: int,
+    tol: float,
+) -> tuple[npt.NDArray, npt.NDArray]:
     """Closest points of x (n, gdim) on the given deformed facets: Gauss-Newton on the facet
     coordinates from s (n, 2) (modified), clipped to the facet. Returns s and |x - y| [m]."""
     moving = np.arange(len(x))
@@ -98,8 +105,12 @@ def pair(
     k = min(candidates, master.num_facets)
     if npts == 0:
         return Pairing(
-            np.zeros(0, np.int64), np.zeros((0, 2)), np.zeros((0, el.gdim)), np.zeros((0, el.gdim)),
-            np.zeros(0), np.zeros((0, el.closure.shape[1])),
+            np.zeros(0, np.int64),
+            np.zeros((0, 2)),
+            np.zeros((0, el.gdim)),
+            np.zeros((0, el.gdim)),
+            np.zeros(0),
+            np.zeros((0, el.closure.shape[1])),
         )
     _, cand = cKDTree(master.centroids(disp)).query(x, k=k)
     cand = cand.reshape(npts, k)
@@ -110,7 +121,9 @@ def pair(
     if previous is not None and previous_s is not None:  # warm start on the previous facet
         same = cand == previous[:, None]
         s[same] = np.repeat(previous_s[:, None, :], k, axis=1)[same]
-    s[:, 0], dist[:, 0] = _closest_on_facets(x, cand[:, 0], s[:, 0], master, facet_disp, max_iterations, tol)
+    s[:, 0], dist[:, 0] = _closest_on_facets(
+        x, cand[:, 0], s[:, 0], master, facet_disp, max_iterations, tol
+    )
     if k > 1:
         # only candidates that can be as close as the nearest-centre facet (to the tolerance
         # of ``previous``), by a lower bound of the distance to a facet
@@ -119,8 +132,9 @@ def pair(
         lower = master.distance_bound(x[rows], cand[rows, cols], facet_disp)
         near = lower <= dist[rows, 0] + 1e-6 * sizes[cand[rows, cols]]
         rows, cols = rows[near], cols[near]
-        s[rows, cols], dist[rows, cols] = _closest_on_facets(x[rows], cand[rows, cols], s[rows, cols], master,
-                                                             facet_disp, max_iterations, tol)
+        s[rows, cols], dist[rows, cols] = _closest_on_facets(
+            x[rows], cand[rows, cols], s[rows, cols], master, facet_disp, max_iterations, tol
+        )
     best = np.argmin(dist, axis=1)
     if previous is not None:
         match = cand == previous[:, None]

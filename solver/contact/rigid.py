@@ -39,6 +39,7 @@ from solver.contact.friction import FrictionLaw
 from solver.contact.model import Status
 from solver.elasticity import sigma
 
+
 @dataclass
 class PlaneContactState:
     """Per quadrature point of the contact facets (owned facets of this rank)."""
@@ -64,14 +65,26 @@ class RigidPlaneContact:
     so it carries no memory between steps, no reversal limit and no round-off estimate.
     """
 
-    def __init__(self, V: fem.FunctionSpace, facet_tags, tag: int, material: Material,
-                 friction: FrictionLaw | None, plane_point: npt.ArrayLike, plane_normal: npt.ArrayLike,
-                 gamma0: float = 10.0, theta: float = 1.0, quadrature_degree: int | None = None):
+    def __init__(
+        self,
+        V: fem.FunctionSpace,
+        facet_tags,
+        tag: int,
+        material: Material,
+        friction: FrictionLaw | None,
+        plane_point: npt.ArrayLike,
+        plane_normal: npt.ArrayLike,
+        gamma0: float = 10.0,
+        theta: float = 1.0,
+        quadrature_degree: int | None = None,
+    ):
         mesh = V.mesh
         gdim = mesh.geometry.dim
         n_o = np.asarray(plane_normal, dtype=float)[:gdim]
         if n_o.shape != (gdim,) or not np.linalg.norm(n_o) > 0:
-            raise ValueError(f"plane_normal must be a nonzero vector of length {gdim}, got {plane_normal}")
+            raise ValueError(
+                f"plane_normal must be a nonzero vector of length {gdim}, got {plane_normal}"
+            )
         if theta not in (-1.0, 0.0, 1.0):
             raise ValueError(f"theta must be 1 (symmetric), 0 or -1 (skew-symmetric), got {theta}")
         if not gamma0 > 0:
@@ -97,7 +110,9 @@ class RigidPlaneContact:
         h = ufl.CellDiameter(mesh)
         gamma = gamma0 * material.E / h
         metadata = {} if quadrature_degree is None else {"quadrature_degree": quadrature_degree}
-        ds = ufl.Measure("ds", domain=mesh, subdomain_data=facet_tags, subdomain_id=tag, metadata=metadata)
+        ds = ufl.Measure(
+            "ds", domain=mesh, subdomain_data=facet_tags, subdomain_id=tag, metadata=metadata
+        )
         w = ufl.TestFunction(V)
         u, u_old = self.u, self.u_old
 
@@ -113,7 +128,10 @@ class RigidPlaneContact:
         gap = ufl.dot(x + u - p0, ufl.as_vector(n_o))
         P_n = s_n(u) + gamma * gap
         pressure = -ufl.conditional(ufl.le(P_n, 0.0), P_n, 0.0)  # the kink P_n = 0 counts as active
-        F = (-theta / gamma * s_n(u) * s_n(w) - pressure / gamma * (theta * s_n(w) - gamma * ufl.dot(w, n))) * ds
+        F = (
+            -theta / gamma * s_n(u) * s_n(w)
+            - pressure / gamma * (theta * s_n(w) - gamma * ufl.dot(w, n))
+        ) * ds
         slip = tangential(u - u_old)
         scale = float(material.E) * 1e-14  # regularisation of |.| at zero [Pa]
         slip_velocity = slip / self.dt
@@ -122,8 +140,10 @@ class RigidPlaneContact:
             speed = ufl.sqrt(ufl.dot(slip_velocity, slip_velocity) + 1e-30)
             limit = friction.coefficient(speed) * pressure
             traction_t = _ball_projection(P_t, limit, scale)
-            F += (-theta / gamma * ufl.dot(s_t(u), s_t(w))
-                  + 1 / gamma * ufl.dot(traction_t, theta * s_t(w) - gamma * tangential(w))) * ds
+            F += (
+                -theta / gamma * ufl.dot(s_t(u), s_t(w))
+                + 1 / gamma * ufl.dot(traction_t, theta * s_t(w) - gamma * tangential(w))
+            ) * ds
         self._forms = {
             "residual": fem.form(F),
             "jacobian": fem.form(ufl.derivative(F, u, ufl.TrialFunction(V))),
@@ -140,7 +160,9 @@ class RigidPlaneContact:
         self._state_expressions = []
         for lf in range(len(basix.topology(cell_type)[mesh.topology.dim - 1])):
             X = _facet_points_in_cell(cell_type, lf, degree)
-            self._state_expressions.append((X, [fem.Expression(e, X, comm=mesh.comm) for e in self._state_fields]))
+            self._state_expressions.append(
+                (X, [fem.Expression(e, X, comm=mesh.comm) for e in self._state_fields])
+            )
 
     def set_reference(self, u_old: fem.Function, dt: float | None) -> None:
         """Displacement at the previous step (slip increments are measured from it) and dt [s]
@@ -206,7 +228,9 @@ class RigidPlaneContact:
         mesh.topology.create_connectivity(tdim - 1, tdim)
         facets = self._facet_tags.find(self._tag)
         facets = facets[facets < mesh.topology.index_map(tdim - 1).size_local]
-        entities = fem.compute_integration_domains(fem.IntegralType.exterior_facet, mesh.topology, facets)
+        entities = fem.compute_integration_domains(
+            fem.IntegralType.exterior_facet, mesh.topology, facets
+        )
         entities = np.asarray(entities).reshape(-1, 2)
         values = [[] for _ in self._state_fields]
         for lf in np.unique(entities[:, 1]):
@@ -216,14 +240,23 @@ class RigidPlaneContact:
                 values[k].append(ex.eval(mesh, on_lf).reshape(len(on_lf) * X.shape[0], -1))
         gdim = mesh.geometry.dim
         gap, pressure, velocity, x, *friction = (
-            np.concatenate(v) if v else np.zeros((0, c)) for v, c in zip(values, (1, 1, gdim, gdim, gdim, 1, 1)))
+            np.concatenate(v) if v else np.zeros((0, c))
+            for v, c in zip(values, (1, 1, gdim, gdim, gdim, 1, 1))
+        )
         gap, pressure = gap[:, 0], pressure[:, 0]
         if friction:  # friction limit mu p versus the trial traction |P_t|
             traction, trial_norm, limit = friction[0], friction[1][:, 0], friction[2][:, 0]
-            status = np.where(pressure > 0, np.where(trial_norm < limit, Status.STICK, Status.SLIP), Status.OPEN)
+            status = np.where(
+                pressure > 0, np.where(trial_norm < limit, Status.STICK, Status.SLIP), Status.OPEN
+            )
         else:
-            traction, status = np.zeros_like(velocity), np.where(pressure > 0, Status.SLIP, Status.OPEN)
-        return PlaneContactState(np.pad(x, ((0, 0), (0, 3 - gdim))), status, gap, pressure, traction, velocity)
+            traction, status = (
+                np.zeros_like(velocity),
+                np.where(pressure > 0, Status.SLIP, Status.OPEN),
+            )
+        return PlaneContactState(
+            np.pad(x, ((0, 0), (0, 3 - gdim))), status, gap, pressure, traction, velocity
+        )
 
 
 def _facet_points_in_cell(cell_type: basix.CellType, local_facet: int, degree: int) -> np.ndarray:

@@ -28,7 +28,9 @@ def _facet_maps(cell: basix.CellType) -> tuple[npt.NDArray, npt.NDArray, basix.C
     geom = basix.geometry(cell)
     facets = basix.topology(cell)[-2]
     origin = np.array([geom[f[0]] for f in facets])
-    axes = np.array([np.column_stack([geom[f[1]] - geom[f[0]], geom[f[2]] - geom[f[0]]]) for f in facets])
+    axes = np.array(
+        [np.column_stack([geom[f[1]] - geom[f[0]], geom[f[2]] - geom[f[0]]]) for f in facets]
+    )
     facet_cell = basix.CellType.quadrilateral if len(facets[0]) == 4 else basix.CellType.triangle
     return origin, axes, facet_cell
 
@@ -60,7 +62,14 @@ def _box_data(element: basix.finite_element.FiniteElement):
     linear = basix.create_element(basix.ElementFamily.P, element.cell_type, 1)
     interpolation = linear.tabulate(0, element.points)[0, :, :, 0]
     t = np.linspace(0.0, 1.0, 101)
-    s = np.array([(a, b) for a in t for b in t if element.cell_type == basix.CellType.quadrilateral or a + b <= 1])
+    s = np.array(
+        [
+            (a, b)
+            for a in t
+            for b in t
+            if element.cell_type == basix.CellType.quadrilateral or a + b <= 1
+        ]
+    )
     lebesgue = 1.05 * float(np.abs(element.tabulate(0, s)[0, :, :, 0]).sum(axis=1).max())
     return element, vertices, interpolation, lebesgue
 
@@ -79,7 +88,9 @@ class _CellElements:
         if len(mesh.topology.entity_types[-1]) != 1:
             raise ValueError("contact needs a mesh with a single cell type")
         if V.dofmap.bs != mesh.geometry.dim or V.element.needs_dof_transformations:
-            raise ValueError("contact needs a blocked vector Lagrange space with one component per space dimension")
+            raise ValueError(
+                "contact needs a blocked vector Lagrange space with one component per space dimension"
+            )
         self.cell = mesh.basix_cell()
         self.gdim = mesh.geometry.dim
         self.tdim = mesh.topology.dim
@@ -92,12 +103,19 @@ class _CellElements:
         nlf = len(self.origin)
         clayout = cmap.create_dof_layout()
         vlayout = V.dofmap.dof_layout
-        self.coord_closure = np.array([clayout.entity_closure_dofs(self.tdim - 1, i) for i in range(nlf)])
+        self.coord_closure = np.array(
+            [clayout.entity_closure_dofs(self.tdim - 1, i) for i in range(nlf)]
+        )
         self.closure = np.array([vlayout.entity_closure_dofs(self.tdim - 1, i) for i in range(nlf)])
-        self.facet_coord_element, self.coord_restriction = self._restriction(self.coord_element, self.coord_closure)
+        self.facet_coord_element, self.coord_restriction = self._restriction(
+            self.coord_element, self.coord_closure
+        )
         self.facet_element, self.restriction = self._restriction(self.element, self.closure)
         same = (self.element.family, self.element.degree, self.element.lagrange_variant) == (
-            self.coord_element.family, self.coord_element.degree, self.coord_element.lagrange_variant)
+            self.coord_element.family,
+            self.coord_element.degree,
+            self.coord_element.lagrange_variant,
+        )
         if same:  # one tabulation serves both
             self.facet_element = self.facet_coord_element
         self.coord_box = _box_data(self.facet_coord_element)  # for MasterSurface.distance_bound
@@ -105,18 +123,30 @@ class _CellElements:
 
     def _restriction(self, element, closure: npt.NDArray):
         """Facet element of ``element`` and the maps R[lf] (ncl, nfacet_dofs) onto the closure dofs."""
-        facet = basix.create_element(element.family, self.facet_cell, element.degree, element.lagrange_variant)
+        facet = basix.create_element(
+            element.family, self.facet_cell, element.degree, element.lagrange_variant
+        )
         nlf = len(self.origin)
         s = facet.points
-        R = np.array([self.tabulate(element, self.reference_points(np.full(len(s), lf), s), 0)[0][:, closure[lf]].T
-                      for lf in range(nlf)])
+        R = np.array(
+            [
+                self.tabulate(element, self.reference_points(np.full(len(s), lf), s), 0)[0][
+                    :, closure[lf]
+                ].T
+                for lf in range(nlf)
+            ]
+        )
         # check at points off the facet element's nodes that the restriction is exact
         s_check = np.array([[0.21, 0.13], [0.37, 0.52], [0.11, 0.71]])
         N_facet = facet.tabulate(0, s_check)[0, :, :, 0]
         for lf in range(nlf):
-            N_cell = self.tabulate(element, self.reference_points(np.full(len(s_check), lf), s_check), 0)[0]
+            N_cell = self.tabulate(
+                element, self.reference_points(np.full(len(s_check), lf), s_check), 0
+            )[0]
             if not np.allclose(N_cell[:, closure[lf]], N_facet @ R[lf].T, atol=1e-12):
-                raise ValueError("contact needs Lagrange elements whose facet traces are facet Lagrange elements")
+                raise ValueError(
+                    "contact needs Lagrange elements whose facet traces are facet Lagrange elements"
+                )
         return facet, R
 
     def reference_points(self, lf: npt.NDArray, s: npt.NDArray) -> npt.NDArray:
@@ -125,12 +155,16 @@ class _CellElements:
 
     def tabulate(self, element: basix.finite_element.FiniteElement, X: npt.NDArray, nderiv: int):
         """Values and reference gradients of all cell basis functions, shape (1+tdim, npts, ndofs)."""
-        if len(X) == 0:  # a rank without points: basix built with assertions (Debian) aborts on none
+        if (
+            len(X) == 0
+        ):  # a rank without points: basix built with assertions (Debian) aborts on none
             return np.zeros((1 + self.tdim if nderiv else 1, 0, element.dim))
         tab = element.tabulate(nderiv, X)[..., 0]
         return tab[: 1 + self.tdim] if nderiv else tab
 
-    def tabulate_facet(self, element: basix.finite_element.FiniteElement, s: npt.NDArray) -> npt.NDArray:
+    def tabulate_facet(
+        self, element: basix.finite_element.FiniteElement, s: npt.NDArray
+    ) -> npt.NDArray:
         """Values and s-derivatives of a facet element's basis at facet points s, shape (3, npts, ndofs)."""
         if len(s) == 0:
             return np.zeros((3, 0, element.dim))
@@ -178,7 +212,10 @@ class MasterSurface:
         coords = x[gnodes[rows, el.coord_closure[lf]]]
         # Orientation: sign that turns d(y)/ds0 x d(y)/ds1 into the outward normal, fixed in the
         # reference configuration (small strains cannot flip a facet).
-        Xc = el.reference_points(lf, np.full((len(lf), 2), 0.5 if el.facet_cell == basix.CellType.quadrilateral else 1 / 3))
+        Xc = el.reference_points(
+            lf,
+            np.full((len(lf), 2), 0.5 if el.facet_cell == basix.CellType.quadrilateral else 1 / 3),
+        )
         dN = el.tabulate(el.coord_element, Xc, 1)[1:]
         J = np.einsum("dpn,pni->pid", dN, x[gnodes])
         t = np.einsum("pid,pdk->pik", J, el.axes[lf])
@@ -191,20 +228,32 @@ class MasterSurface:
         self.comm = comm
         self.coords = _gather(comm, coords)  #: reference node coordinates (nF, ncg, gdim) [m]
         self.local_facet = _gather(comm, lf)  #: local facet index of each gathered facet
-        self.blocks = _gather(comm, blocks.astype(np.int64))  #: global block (node) indices (nF, ncl)
+        self.blocks = _gather(
+            comm, blocks.astype(np.int64)
+        )  #: global block (node) indices (nF, ncl)
         self.orientation = _gather(comm, orientation)
         self.num_local = len(facets)
         #: deformation-free positions at the facet element's nodes (nF, nfc, gdim) [m]
-        self.facet_coords = np.einsum("fij,fid->fjd", el.coord_restriction[self.local_facet], self.coords)
-        self.sizes = self._sizes()  #: facet sizes (largest node distance from the centre) [m], search scales
-        centre = np.full((self.num_facets, 2), 0.5 if el.facet_cell == basix.CellType.quadrilateral else 1 / 3)
+        self.facet_coords = np.einsum(
+            "fij,fid->fjd", el.coord_restriction[self.local_facet], self.coords
+        )
+        self.sizes = (
+            self._sizes()
+        )  #: facet sizes (largest node distance from the centre) [m], search scales
+        centre = np.full(
+            (self.num_facets, 2), 0.5 if el.facet_cell == basix.CellType.quadrilateral else 1 / 3
+        )
         dN = el.tabulate_facet(el.facet_coord_element, centre)[1:]
         t = _gradient(dN, self.facet_coords)  # (nF, gdim, 2)
         t1 = t[:, :, 0] / np.linalg.norm(t[:, :, 0], axis=1)[:, None]
         nrm = np.cross(t[:, :, 0], t[:, :, 1])
         nrm /= np.linalg.norm(nrm, axis=1)[:, None]
-        self.frames = np.stack([t1, np.cross(nrm, t1), nrm], axis=1)  #: facet frames (nF, 3, 3), rows unit vectors
-        self._reference_boxes = self._box(self.facet_coords, np.arange(self.num_facets), *el.coord_box)
+        self.frames = np.stack(
+            [t1, np.cross(nrm, t1), nrm], axis=1
+        )  #: facet frames (nF, 3, 3), rows unit vectors
+        self._reference_boxes = self._box(
+            self.facet_coords, np.arange(self.num_facets), *el.coord_box
+        )
 
     @property
     def num_facets(self) -> int:
@@ -224,16 +273,24 @@ class MasterSurface:
         dofs) at (facet, s); ``facet_disp`` from ``facet_displacement``."""
         el = self.elements
         cg = el.tabulate_facet(el.facet_coord_element, s)
-        cv = cg if el.facet_element is el.facet_coord_element else el.tabulate_facet(el.facet_element, s)
+        cv = (
+            cg
+            if el.facet_element is el.facet_coord_element
+            else el.tabulate_facet(el.facet_element, s)
+        )
         y = _combine(cg[0], self.facet_coords[facet]) + _combine(cv[0], facet_disp[facet])
         dyds = _gradient(cg[1:], self.facet_coords[facet]) + _gradient(cv[1:], facet_disp[facet])
         return y, dyds, cv[0]
 
     def closure_values(self, facet: npt.NDArray, facet_values: npt.NDArray) -> npt.NDArray:
         """Facet-element basis values (npts, nf) as values of the cell's closure basis (npts, ncl)."""
-        return (self.elements.restriction[self.local_facet[facet]] @ facet_values[:, :, None])[:, :, 0]
+        return (self.elements.restriction[self.local_facet[facet]] @ facet_values[:, :, None])[
+            :, :, 0
+        ]
 
-    def distance_bound(self, x: npt.NDArray, facet: npt.NDArray, facet_disp: npt.NDArray) -> npt.NDArray:
+    def distance_bound(
+        self, x: npt.NDArray, facet: npt.NDArray, facet_disp: npt.NDArray
+    ) -> npt.NDArray:
         """Lower bound of the distance [m] from points x (n, gdim) to the deformed facets ``facet`` (n,).
 
         In each facet's frame (tangents and normal at its reference centre) a coordinate of a
@@ -277,7 +334,9 @@ class SlaveQuadrature:
     ``cells`` the local cells of the slave facets.
     """
 
-    def __init__(self, V: dolfinx.fem.FunctionSpace, facet_tags: dolfinx.mesh.MeshTags, tag: int, degree: int):
+    def __init__(
+        self, V: dolfinx.fem.FunctionSpace, facet_tags: dolfinx.mesh.MeshTags, tag: int, degree: int
+    ):
         mesh = V.mesh
         el = _CellElements(V)
         facets, cells, lf = _facets_with_cells(mesh, facet_tags, tag)
@@ -317,4 +376,3 @@ class SlaveQuadrature:
         """Displacement at the slave points, shape (np, gdim) [m]."""
         values = u.x.array.reshape(-1, self.gdim)[self.dofs]
         return _combine(self.values, values)
-

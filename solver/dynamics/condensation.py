@@ -39,7 +39,9 @@ from solver.dynamics.linear_algebra import direct_solver
 __all__ = ["BulkCondensation", "bulk_parts"]
 
 
-def _dof_marker(V: dolfinx.fem.FunctionSpace, cells: npt.NDArray[np.int32]) -> npt.NDArray[np.bool_]:
+def _dof_marker(
+    V: dolfinx.fem.FunctionSpace, cells: npt.NDArray[np.int32]
+) -> npt.NDArray[np.bool_]:
     """Owned dofs (unrolled, block size included) of the given owned cells, on any rank."""
     imap, bs = V.dofmap.index_map, V.dofmap.index_map_bs
     marker = dolfinx.la.vector(imap, bs)
@@ -65,10 +67,11 @@ def bulk_parts(V: dolfinx.fem.FunctionSpace, cells: npt.NDArray[np.int32]) -> np
     nodes = V.dofmap.list[cells]
     incidence = scipy.sparse.coo_matrix(
         (np.ones(nodes.size), (np.repeat(np.arange(len(cells)), nodes.shape[1]), nodes.ravel())),
-        shape=(len(cells), n_nodes)).tocsr()
+        shape=(len(cells), n_nodes),
+    ).tocsr()
     graph = scipy.sparse.bmat([[None, incidence], [incidence.T, None]])
     _, component = scipy.sparse.csgraph.connected_components(graph, directed=False)
-    component = component[len(cells):]  # the nodes' components
+    component = component[len(cells) :]  # the nodes' components
     used = np.zeros(n_nodes, dtype=bool)
     used[nodes.ravel()] = True
     never = np.iinfo(np.int64).max
@@ -80,7 +83,9 @@ def bulk_parts(V: dolfinx.fem.FunctionSpace, cells: npt.NDArray[np.int32]) -> np
         smallest = np.full(component.max() + 1 if n_nodes else 0, never, dtype=np.int64)
         np.minimum.at(smallest, component[used], np.minimum(labels[used], global_index[used]))
         new = np.where(used, smallest[component], never)
-        with vec.localForm() as loc:  # the minimum over ranks as a maximum of -label (exact in float64)
+        with (
+            vec.localForm() as loc
+        ):  # the minimum over ranks as a maximum of -label (exact in float64)
             loc.array[:] = np.where(used, -new.astype(np.float64), -np.inf)
         vec.ghostUpdate(addv=PETSc.InsertMode.MAX_VALUES, mode=PETSc.ScatterMode.REVERSE)
         vec.ghostUpdate(addv=PETSc.InsertMode.INSERT_VALUES, mode=PETSc.ScatterMode.FORWARD)
@@ -99,8 +104,9 @@ def bulk_parts(V: dolfinx.fem.FunctionSpace, cells: npt.NDArray[np.int32]) -> np
 
 @dataclass
 class _Part:
-    """One bulk part: its dofs (local positions among the owned dofs), its interface dofs (local positions; global indices of all ranks'), the blocks of A, the
-    direct solver of A_kk and work vectors (x, y on the part, w on its interface)."""
+    """One bulk part: its dofs (local positions among the owned dofs), its interface dofs (local
+    positions; global indices of all ranks'), the blocks of A, the direct solver of A_kk and
+    work vectors (x, y on the part, w on its interface)."""
 
     bulk: npt.NDArray
     interface: npt.NDArray
@@ -117,12 +123,25 @@ class _Part:
 
     def extract(self, A: PETSc.Mat) -> None:
         """The part's blocks of A (new values, same sparsity)."""
-        for block, rows, cols in ((self.A_kk, self.is_bulk, self.is_bulk), (self.A_ki, self.is_bulk, self.is_interface),
-                                  (self.A_ik, self.is_interface, self.is_bulk)):
+        for block, rows, cols in (
+            (self.A_kk, self.is_bulk, self.is_bulk),
+            (self.A_ki, self.is_bulk, self.is_interface),
+            (self.A_ik, self.is_interface, self.is_bulk),
+        ):
             A.createSubMatrix(rows, cols, submat=block)
 
     def destroy(self) -> None:
-        for obj in (self.is_bulk, self.is_interface, self.A_kk, self.A_ki, self.A_ik, self.ksp, self.x, self.y, self.w):
+        for obj in (
+            self.is_bulk,
+            self.is_interface,
+            self.A_kk,
+            self.A_ki,
+            self.A_ik,
+            self.ksp,
+            self.x,
+            self.y,
+            self.w,
+        ):
             obj.destroy()
 
 
@@ -138,8 +157,14 @@ class BulkCondensation:
         chunk: interface columns per multiple-right-hand-side solve when building S.
     """
 
-    def __init__(self, A: PETSc.Mat, V: dolfinx.fem.FunctionSpace, zone_cells: npt.NDArray[np.int32],
-                 lu_solver: str = "mumps", chunk: int = 64):
+    def __init__(
+        self,
+        A: PETSc.Mat,
+        V: dolfinx.fem.FunctionSpace,
+        zone_cells: npt.NDArray[np.int32],
+        lu_solver: str = "mumps",
+        chunk: int = 64,
+    ):
         comm = A.getComm()
         self._comm = comm.tompi4py()
         topology = V.mesh.topology
@@ -155,12 +180,16 @@ class BulkCondensation:
         bs = V.dofmap.index_map_bs
         part_of_dof = np.repeat(bulk_parts(V, owned[~in_zone]), bs)
         start = A.getOwnershipRange()[0]
-        self._Z, self._B, self._I = (np.flatnonzero(m).astype(PETSc.IntType) for m in (zone, ~zone, interface))
+        self._Z, self._B, self._I = (
+            np.flatnonzero(m).astype(PETSc.IntType) for m in (zone, ~zone, interface)
+        )
         #: the zone's dofs (global indices, this rank's part): A_hat is block diagonal in (zone, bulk)
         self.zone = PETSc.IS().createGeneral(start + self._Z, comm=comm)
         n_parts = self._comm.allreduce(int(part_of_dof.max(initial=-1)) + 1, op=MPI.MAX)
-        self.sizes = {name: self._comm.allreduce(len(d), op=MPI.SUM) for name, d in
-                      (("zone", self._Z), ("bulk", self._B), ("interface", self._I))} | {"parts": n_parts}
+        self.sizes = {
+            name: self._comm.allreduce(len(d), op=MPI.SUM)
+            for name, d in (("zone", self._Z), ("bulk", self._B), ("interface", self._I))
+        } | {"parts": n_parts}
         self._parts = []
         for k in range(n_parts):
             bulk = np.flatnonzero(~zone & (part_of_dof == k)).astype(PETSc.IntType)
@@ -170,11 +199,22 @@ class BulkCondensation:
             A_kk = A.createSubMatrix(is_bulk, is_bulk)
             A_ki = A.createSubMatrix(is_bulk, is_interface)
             x, y = A_kk.createVecs()
-            self._parts.append(_Part(bulk, ring,
-                                     np.concatenate(self._comm.allgather(start + ring)), is_bulk, is_interface,
-                                     A_kk, A_ki, A.createSubMatrix(is_interface, is_bulk),
-                                     direct_solver(comm, A_kk, lu_solver, prefix="condensation_"), x, y,
-                                     A_ki.createVecRight()))
+            self._parts.append(
+                _Part(
+                    bulk,
+                    ring,
+                    np.concatenate(self._comm.allgather(start + ring)),
+                    is_bulk,
+                    is_interface,
+                    A_kk,
+                    A_ki,
+                    A.createSubMatrix(is_interface, is_bulk),
+                    direct_solver(comm, A_kk, lu_solver, prefix="condensation_"),
+                    x,
+                    y,
+                    A_ki.createVecRight(),
+                )
+            )
         self._zone_marker, self._chunk = zone, chunk
         self.A_hat: PETSc.Mat | None = None
         self._condense(A)
@@ -201,7 +241,9 @@ class BulkCondensation:
         # one right-hand-side block of fixed width for every chunk, the last one padded with
         # zero columns: SuperLU_DIST's parallel MatMatSolve corrupts memory when the number of
         # right-hand sides changes between calls
-        Rc = PETSc.Mat().createDense(((columns.shape[0], R.getSize()[0]), (None, width)), comm=R.getComm())
+        Rc = PETSc.Mat().createDense(
+            ((columns.shape[0], R.getSize()[0]), (None, width)), comm=R.getComm()
+        )
         Rc.setUp()
         Xc = Rc.duplicate()
         factor = part.ksp.getPC().getFactorMatrix()
@@ -230,8 +272,14 @@ class BulkCondensation:
         indptr, cols, vals = A.getValuesCSR()
         rows = np.repeat(np.arange(n), np.diff(indptr))
         keep = zone[rows] & zone_global[cols]
-        blocks = [(np.repeat(p.interface, len(p.interface_global)), np.tile(p.interface_global, len(p.interface)),
-                   -c.ravel()) for p, c in zip(self._parts, corrections)]
+        blocks = [
+            (
+                np.repeat(p.interface, len(p.interface_global)),
+                np.tile(p.interface_global, len(p.interface)),
+                -c.ravel(),
+            )
+            for p, c in zip(self._parts, corrections)
+        ]
         all_rows = np.concatenate([rows[keep], self._B, *(b[0] for b in blocks)])
         all_cols = np.concatenate([cols[keep], start + self._B, *(b[1] for b in blocks)])
         all_vals = np.concatenate([vals[keep], np.ones(len(self._B)), *(b[2] for b in blocks)])

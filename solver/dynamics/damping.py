@@ -26,10 +26,14 @@ class RayleighDamping:
 
     def __post_init__(self) -> None:
         if self.a < 0 or self.b < 0:
-            raise ValueError(f"Rayleigh coefficients must be >= 0, got a={self.a} 1/s, b={self.b} s")
+            raise ValueError(
+                f"Rayleigh coefficients must be >= 0, got a={self.a} 1/s, b={self.b} s"
+            )
 
     @classmethod
-    def from_two_frequencies(cls, zeta1: float, f1: float, zeta2: float, f2: float) -> "RayleighDamping":
+    def from_two_frequencies(
+        cls, zeta1: float, f1: float, zeta2: float, f2: float
+    ) -> "RayleighDamping":
         """Coefficients giving damping ratios zeta1 at f1 [Hz] and zeta2 at f2 [Hz] exactly."""
         if not (f1 > 0 and f2 > 0) or f1 == f2:
             raise ValueError(f"need two distinct positive frequencies, got {f1} Hz and {f2} Hz")
@@ -54,10 +58,17 @@ class RayleighDamping:
 class ModalDamping:
     """C = M Phi diag(2 zeta_i omega_i) Phi^T M from M-orthonormal modes (low rank, matrix-free)."""
 
-    def __init__(self, M: PETSc.Mat, modes: Sequence[PETSc.Vec], frequencies_hz: Sequence[float],
-                 zeta: float | Sequence[float] = 0.01):
+    def __init__(
+        self,
+        M: PETSc.Mat,
+        modes: Sequence[PETSc.Vec],
+        frequencies_hz: Sequence[float],
+        zeta: float | Sequence[float] = 0.01,
+    ):
         if len(modes) == 0 or len(modes) != len(frequencies_hz):
-            raise ValueError(f"need one frequency per mode, got {len(modes)} modes, {len(frequencies_hz)} frequencies")
+            raise ValueError(
+                f"need one frequency per mode, got {len(modes)} modes, {len(frequencies_hz)} frequencies"
+            )
         zeta = np.broadcast_to(np.asarray(zeta, dtype=float), (len(modes),))
         if np.any(zeta < 0) or np.any(np.asarray(frequencies_hz) <= 0):
             raise ValueError("modal damping needs zeta >= 0 and positive frequencies")
@@ -86,7 +97,9 @@ class ModalDamping:
         """The modal damping force is explicit in time: require 2 zeta omega dt <= 0.5 for every mode."""
         worst = float(np.max(self.coefficients)) * dt
         if worst > 0.5:
-            raise ValueError(f"time step {dt} s too large for explicit modal damping (2 zeta omega dt = {worst:.3g} > 0.5)")
+            raise ValueError(
+                f"time step {dt} s too large for explicit modal damping (2 zeta omega dt = {worst:.3g} > 0.5)"
+            )
 
 
 def rayleigh_from_dict(data: dict) -> RayleighDamping:
@@ -102,10 +115,14 @@ def rayleigh_from_dict(data: dict) -> RayleighDamping:
     if keys and keys <= {"a", "b"}:
         return RayleighDamping(a=float(data.get("a", 0.0)), b=float(data.get("b", 0.0)))
     if keys != {"zeta", "frequency_hz"}:
-        raise ValueError(f"[damping] needs zeta and frequency_hz (or a and b), got keys {sorted(keys)}")
+        raise ValueError(
+            f"[damping] needs zeta and frequency_hz (or a and b), got keys {sorted(keys)}"
+        )
     zeta, f = data["zeta"], data["frequency_hz"]
     if isinstance(zeta, (int, float)) and isinstance(f, (int, float)):
         return RayleighDamping.at_frequency(float(zeta), float(f))
     if isinstance(zeta, list) and isinstance(f, list) and len(zeta) == len(f) == 2:
         return RayleighDamping.from_two_frequencies(zeta[0], f[0], zeta[1], f[1])
-    raise ValueError(f"[damping] zeta and frequency_hz must be two numbers or two lists of two, got {zeta!r}, {f!r}")
+    raise ValueError(
+        f"[damping] zeta and frequency_hz must be two numbers or two lists of two, got {zeta!r}, {f!r}"
+    )

@@ -41,8 +41,12 @@ from solver.elasticity import epsilon, sigma
 Load = Callable[[float, PETSc.Vec], None]  #: load(t, out): write the load vector f(t) [N] into out
 
 
-def assemble_structure(V: fem.FunctionSpace, material: Material, bcs: Sequence[fem.DirichletBC],
-                       extra_stiffness: ufl.Form | None = None) -> tuple[PETSc.Mat, PETSc.Mat]:
+def assemble_structure(
+    V: fem.FunctionSpace,
+    material: Material,
+    bcs: Sequence[fem.DirichletBC],
+    extra_stiffness: ufl.Form | None = None,
+) -> tuple[PETSc.Mat, PETSc.Mat]:
     """Mass M [kg] and stiffness K [N/m] of linear elasticity on V (bc rows: identity)."""
     u, w = ufl.TrialFunction(V), ufl.TestFunction(V)
     k = ufl.inner(sigma(u, material), epsilon(w)) * ufl.dx
@@ -76,27 +80,45 @@ class Elastodynamics:
     is the outcome of the last step attempted.
     """
 
-    def __init__(self, V: fem.FunctionSpace, M: PETSc.Mat, K: PETSc.Mat, bcs: Sequence[fem.DirichletBC],
-                 load: Load | None = None, scheme: Scheme = GeneralisedAlpha(),
-                 damping: RayleighDamping | ModalDamping | None = None, contact: ContactModel | None = None,
-                 newton_options: dict | None = None, condense_bulk: bool = False):
+    def __init__(
+        self,
+        V: fem.FunctionSpace,
+        M: PETSc.Mat,
+        K: PETSc.Mat,
+        bcs: Sequence[fem.DirichletBC],
+        load: Load | None = None,
+        scheme: Scheme = GeneralisedAlpha(),
+        damping: RayleighDamping | ModalDamping | None = None,
+        contact: ContactModel | None = None,
+        newton_options: dict | None = None,
+        condense_bulk: bool = False,
+    ):
         if condense_bulk and contact is None:
-            raise ValueError("condense_bulk needs a contact object (the bulk is condensed away from its cells)")
-        self.condense_bulk = condense_bulk  #: Newton on the contact zone, the bulk condensed (solver.dynamics.condensation)
+            raise ValueError(
+                "condense_bulk needs a contact object (the bulk is condensed away from its cells)"
+            )
+        #: Newton on the contact zone, the bulk condensed (solver.dynamics.condensation)
+        self.condense_bulk = condense_bulk
         self._condensation: BulkCondensation | None = None
         self.V, self.M, self.K, self.bcs = V, M, K, list(bcs)
         self.scheme, self.damping, self.contact = scheme, damping, contact
         self.load = load
-        self.newton_options = dict(newton_options or {})  #: options of solver.dynamics.newton.ContactNewtonSolver
+        self.newton_options = dict(
+            newton_options or {}
+        )  #: options of solver.dynamics.newton.ContactNewtonSolver
         self._newton = None
-        self.u, self.v, self.a = (fem.Function(V, name=n) for n in ("displacement", "velocity", "acceleration"))
+        self.u, self.v, self.a = (
+            fem.Function(V, name=n) for n in ("displacement", "velocity", "acceleration")
+        )
         self.t = 0.0
         self._bc_dofs = self._homogeneous_bc_dofs()
         self._f_old, self._f_new = K.createVecLeft(), K.createVecLeft()
         self._b, self._work, self._b_hat = K.createVecLeft(), K.createVecLeft(), K.createVecLeft()
         self._r_contact_old = K.createVecLeft()  # r_c(u_n), used when alpha_f > 0
         self.failed_steps = 0  #: steps that did not converge (each one cut by ``run``)
-        self.contact_status: np.ndarray | None = None  #: contact status at the end of the last step (this rank's points)
+        self.contact_status: np.ndarray | None = (
+            None  #: contact status at the end of the last step (this rank's points)
+        )
         self.last_result: StepResult | None = None  #: outcome of the last step attempted
         self.A = K.duplicate(copy=True)
         self._dt_of_A = None
@@ -108,7 +130,9 @@ class Elastodynamics:
         probe.set(0.0)
         fem_petsc.set_bc(probe, self.bcs)
         if probe.norm() > 0:
-            raise ValueError("Elastodynamics supports homogeneous Dirichlet conditions (clamped boundaries) only")
+            raise ValueError(
+                "Elastodynamics supports homogeneous Dirichlet conditions (clamped boundaries) only"
+            )
         probe.set(1.0)
         fem_petsc.set_bc(probe, self.bcs, alpha=0.0)
         return np.flatnonzero(probe.array_r == 0.0).astype(np.int32)  # owned bc dofs
@@ -123,7 +147,11 @@ class Elastodynamics:
         if self._dt_of_A == dt:
             return
         c_M, c_C = self.scheme.coefficients(dt)
-        a_R, b_R = (self.damping.a, self.damping.b) if isinstance(self.damping, RayleighDamping) else (0.0, 0.0)
+        a_R, b_R = (
+            (self.damping.a, self.damping.b)
+            if isinstance(self.damping, RayleighDamping)
+            else (0.0, 0.0)
+        )
         self.K.copy(self.A, structure=PETSc.Mat.Structure.SAME_NONZERO_PATTERN)
         self.A.scale(1.0 + c_C * b_R)
         self.A.axpy(c_M + c_C * a_R, self.M, structure=PETSc.Mat.Structure.SUBSET_NONZERO_PATTERN)
@@ -139,10 +167,18 @@ class Elastodynamics:
                 self._newton.set_operator(self.A)
         else:
             if self.condense_bulk:
-                self._condensation = BulkCondensation(self.A, self.V, self.contact.support_cells,
-                                                      lu_solver=self.newton_options.get("lu_solver", "mumps"))
-                self._newton = ContactNewtonSolver(self._condensation.A_hat, self.bcs, zone=self._condensation.zone,
-                                                   **self.newton_options)
+                self._condensation = BulkCondensation(
+                    self.A,
+                    self.V,
+                    self.contact.support_cells,
+                    lu_solver=self.newton_options.get("lu_solver", "mumps"),
+                )
+                self._newton = ContactNewtonSolver(
+                    self._condensation.A_hat,
+                    self.bcs,
+                    zone=self._condensation.zone,
+                    **self.newton_options,
+                )
             else:
                 self._newton = ContactNewtonSolver(self.A, self.bcs, **self.newton_options)
 
@@ -281,7 +317,9 @@ class Elastodynamics:
             self.contact_status = self.contact.state.status.copy()
         v_new, a_new = self.scheme.update(self.u.x.array, u_old, self.v.x.array, self.a.x.array, dt)
         self.v.x.array[:], self.a.x.array[:] = v_new, a_new
-        if self.contact is not None:  # kept whatever the scheme: a later one may weight it (alpha_f)
+        if (
+            self.contact is not None
+        ):  # kept whatever the scheme: a later one may weight it (alpha_f)
             self.contact.residual().copy(self._r_contact_old)
         self._f_new.copy(self._f_old)
         self.t += dt
@@ -305,8 +343,12 @@ class Elastodynamics:
         on besides t: u, v, a [m, m/s, m/s^2], the contact residual at u_n (generalised-alpha) [N],
         the contact model's memory and, after a contact step, the points' status (which chooses
         the next step's Newton start). Views, not copies."""
-        arrays = {"u": self.u.x.array, "v": self.v.x.array, "a": self.a.x.array,
-                  "r_contact_old": self._r_contact_old.array_r}
+        arrays = {
+            "u": self.u.x.array,
+            "v": self.v.x.array,
+            "a": self.a.x.array,
+            "r_contact_old": self._r_contact_old.array_r,
+        }
         if self.contact is not None:
             arrays.update(self.contact.memory())
             if self.contact_status is not None:
@@ -325,7 +367,9 @@ class Elastodynamics:
             self.contact.set_reference(self.u, None)
             self.contact.update(self.u)
             self.contact.restore_memory(arrays)
-            self.contact_status = arrays["contact_status"].copy() if "contact_status" in arrays else None
+            self.contact_status = (
+                arrays["contact_status"].copy() if "contact_status" in arrays else None
+            )
 
     def energy(self) -> tuple[float, float]:
         """(kinetic 1/2 v.Mv, strain 1/2 u.Ku) [J]."""

@@ -96,7 +96,9 @@ class FactorStore:
             P = self._A.copy()
             P.axpy(1.0, J_zone, PETSc.Mat.Structure.DIFFERENT_NONZERO_PATTERN)
             if slot is None:
-                slot = Factors(P, direct_solver(self._comm, package=self.lu_solver), J.copy(), pattern, status)
+                slot = Factors(
+                    P, direct_solver(self._comm, package=self.lu_solver), J.copy(), pattern, status
+                )
             else:
                 for old in (slot.P, slot.J_P):
                     old.destroy()
@@ -121,8 +123,9 @@ class FactorStore:
     def nearest(self, status: np.ndarray) -> Factors:
         """The kept factors whose contact status differs from ``status`` at the fewest points (all
         ranks), the most recently used on a tie; marked as used."""
-        mismatch = self._comm.allreduce(np.array([np.count_nonzero(f.status != status) for f in self._factors]),
-                                        op=MPI.SUM)
+        mismatch = self._comm.allreduce(
+            np.array([np.count_nonzero(f.status != status) for f in self._factors]), op=MPI.SUM
+        )
         return self.use(min(zip(mismatch, self._factors), key=lambda m: (m[0], -m[1].used))[1])
 
     def destroy(self) -> None:

@@ -23,10 +23,18 @@ import scipy.optimize
 
 from solver.dynamics.schemes import GeneralisedAlpha, QuasiStatic, Scheme
 
-__all__ = ["SchemeAccuracy", "accuracy", "amplification_matrix", "compensated_frequency", "discrete_frequency"]
+__all__ = [
+    "SchemeAccuracy",
+    "accuracy",
+    "amplification_matrix",
+    "compensated_frequency",
+    "discrete_frequency",
+]
 
 
-def amplification_matrix(scheme: GeneralisedAlpha, omega_dt: float, zeta: float = 0.0) -> np.ndarray:
+def amplification_matrix(
+    scheme: GeneralisedAlpha, omega_dt: float, zeta: float = 0.0
+) -> np.ndarray:
     """G with x_{n+1} = G x_n, x = (q, dt q', dt^2 q'') for q'' + 2 zeta omega q' + omega^2 q = 0.
 
     Rows of the balance (1 - alpha_m) a_{n+1} + alpha_m a_n + 2 zeta omega v_{n+1-alpha_f} +
@@ -34,12 +42,8 @@ def amplification_matrix(scheme: GeneralisedAlpha, omega_dt: float, zeta: float 
     """
     b, g, am, af = scheme.beta, scheme.gamma, scheme.alpha_m, scheme.alpha_f
     w, c = omega_dt, 2.0 * zeta * omega_dt
-    lhs = np.array([[w**2 * (1 - af), c * (1 - af), 1 - am],
-                    [1.0, 0.0, -b],
-                    [0.0, 1.0, -g]])
-    rhs = np.array([[-(w**2) * af, -c * af, -am],
-                    [1.0, 1.0, 0.5 - b],
-                    [0.0, 1.0, 1.0 - g]])
+    lhs = np.array([[w**2 * (1 - af), c * (1 - af), 1 - am], [1.0, 0.0, -b], [0.0, 1.0, -g]])
+    rhs = np.array([[-(w**2) * af, -c * af, -am], [1.0, 1.0, 0.5 - b], [0.0, 1.0, 1.0 - g]])
     return np.linalg.solve(lhs, rhs)
 
 
@@ -48,7 +52,9 @@ def _principal(scheme: GeneralisedAlpha, omega_dt: float) -> complex:
     eigenvalues = np.linalg.eigvals(amplification_matrix(scheme, omega_dt))
     principal = eigenvalues[np.argmax(eigenvalues.imag)]
     if not principal.imag > 0:
-        raise ValueError(f"omega dt = {omega_dt:.3g} is beyond the scheme's oscillation limit (too few steps per period)")
+        raise ValueError(
+            f"omega dt = {omega_dt:.3g} is beyond the scheme's oscillation limit (too few steps per period)"
+        )
     return complex(principal)
 
 
@@ -77,10 +83,17 @@ def discrete_frequency(scheme: GeneralisedAlpha, frequency_hz: float, dt: float)
     return np.angle(_principal(scheme, 2 * np.pi * frequency_hz * dt)) / (2 * np.pi * dt)
 
 
-def compensated_frequency(scheme: GeneralisedAlpha, frequency_hz: float, steps_per_period: int) -> float:
+def compensated_frequency(
+    scheme: GeneralisedAlpha, frequency_hz: float, steps_per_period: int
+) -> float:
     """Excitation frequency f_c [Hz] at which the time-discrete model of the mode at ``frequency_hz``
     resonates when stepped with dt = 1 / (f_c steps_per_period): arg lambda(omega dt) = 2 pi / N."""
     target = 2 * np.pi / steps_per_period
-    x = scipy.optimize.brentq(lambda x: np.angle(_principal(scheme, x)) - target, 0.5 * target, 2.0 * target,
-                              xtol=1e-15, rtol=1e-15)
+    x = scipy.optimize.brentq(
+        lambda x: np.angle(_principal(scheme, x)) - target,
+        0.5 * target,
+        2.0 * target,
+        xtol=1e-15,
+        rtol=1e-15,
+    )
     return frequency_hz * target / x

@@ -22,8 +22,9 @@ from solver.dynamics.linear_algebra import direct_solver
 __all__ = ["harmonic_response"]
 
 
-def harmonic_response(M: PETSc.Mat, K: PETSc.Mat, damping: RayleighDamping, force: PETSc.Vec,
-                      frequency_hz: float) -> tuple[PETSc.Vec, PETSc.Vec]:
+def harmonic_response(
+    M: PETSc.Mat, K: PETSc.Mat, damping: RayleighDamping, force: PETSc.Vec, frequency_hz: float
+) -> tuple[PETSc.Vec, PETSc.Vec]:
     """(U_re, U_im) [m] of the steady state under the load amplitude ``force`` [N] at ``frequency_hz``."""
     if not frequency_hz > 0:
         raise ValueError(f"frequency must be positive, got {frequency_hz} Hz")

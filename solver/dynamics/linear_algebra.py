@@ -6,10 +6,12 @@ contexts).
 import numpy as np
 from petsc4py import PETSc
 
-__all__ = ["BlockLU", "SumOperator", "direct_solver"]
+__all__ = ["BlockLU", "SumOperator", "direct_solver", "forcing_term"]
 
 
-def direct_solver(comm, A: PETSc.Mat | None = None, package: str = "mumps", prefix: str | None = None) -> PETSc.KSP:
+def direct_solver(
+    comm, A: PETSc.Mat | None = None, package: str = "mumps", prefix: str | None = None
+) -> PETSc.KSP:
     """A direct solver: a KSP that applies the LU factors of its operator (``A``, or set later),
     computed by the PETSc package ``package`` ("mumps", "superlu_dist", "petsc"). With
     ``prefix`` the user's PETSc options under that prefix apply (e.g.
@@ -67,8 +69,14 @@ class SumOperator:
 
     ZERO = "zero"
 
-    def __init__(self, A: PETSc.Mat, J: PETSc.Mat, J_P: PETSc.Mat, preconditioner: BlockLU,
-                 difference: PETSc.Mat | str | None = None):
+    def __init__(
+        self,
+        A: PETSc.Mat,
+        J: PETSc.Mat,
+        J_P: PETSc.Mat,
+        preconditioner: BlockLU,
+        difference: PETSc.Mat | str | None = None,
+    ):
         self.A, self.J, self.J_P, self.preconditioner = A, J, J_P, preconditioner
         self.difference = difference
         self._work = J.createVecLeft()
@@ -90,3 +98,29 @@ class SumOperator:
 
     def destroy(self, mat):
         self._work.destroy()
+
+
+def forcing_term(
+    norms: list[float], eta_old: float, tol: float, forcing_max: float, krylov_rtol: float
+) -> float:
+    """GMRES relative tolerance eta_k of the next inexact Newton correction, stopping GMRES at
+    ||F + (A + J_c) du|| <= eta_k ||F|| (Eisenstat and Walker 1996, choice 2, safeguarded).
+
+    ``norms``: ||F_0||, ..., ||F_k|| [N]; ``eta_old``: the previous eta; ``tol``: the Newton
+    tolerance [N]. eta_0 = 0.5 tol / ||F_0|| (a nearly linear step, e.g. a quiet vibration step,
+    then converges in one iteration); eta_k = 0.9 (||F_k|| / ||F_{k-1}||)^2, at least
+    0.9 eta_{k-1}^2 when that exceeds 0.1, capped at ``forcing_max``, and never tighter than
+    needed to reach the Newton tolerance (0.5 tol / ||F_k||) nor than ``krylov_rtol``. Far from
+    the solution a few GMRES iterations suffice; near it eta_k = O(||F_k||) keeps the rate
+    quadratic. ``forcing_max = 0``: every correction to ``krylov_rtol`` (exact Newton).
+    """
+    if forcing_max == 0.0:
+        return krylov_rtol
+    if len(norms) == 1:
+        eta = 0.5 * tol / norms[0]
+    else:
+        eta = 0.9 * (norms[-1] / norms[-2]) ** 2
+        if 0.9 * eta_old**2 > 0.1:
+            eta = max(eta, 0.9 * eta_old**2)
+    eta = min(eta, forcing_max)
+    return max(eta, 0.5 * tol / norms[-1], krylov_rtol)

@@ -85,8 +85,10 @@ class PiecewiseLinearForce:
         t = np.asarray(self.times_s, dtype=float)
         f = np.asarray(self.forces_N, dtype=float)
         if t.ndim != 1 or t.size == 0 or t.shape != f.shape:
-            raise ValueError(f"need as many forces as times (at least one), got {t.size} times "
-                             f"and {f.size} forces")
+            raise ValueError(
+                f"need as many forces as times (at least one), got {t.size} times "
+                f"and {f.size} forces"
+            )
         if not (np.all(np.isfinite(t)) and np.all(np.isfinite(f))):
             raise ValueError("times_s and forces_N must be finite")
         if np.any(np.diff(t) <= 0):
@@ -120,24 +122,33 @@ class Stage:
 
     def __post_init__(self) -> None:
         if not (isinstance(self.duration_s, (int, float)) and self.duration_s > 0):
-            raise ValueError(f"stage duration_s must be a positive number of seconds, got {self.duration_s!r}")
+            raise ValueError(
+                f"stage duration_s must be a positive number of seconds, got {self.duration_s!r}"
+            )
         if isinstance(self.frequency_hz, str):
             m = _MODE.match(self.frequency_hz)
             if not m or int(m.group(2)) < 1:
-                raise ValueError(f"stage frequency_hz must be a number [Hz], 'mode k' or 'ranked k' "
-                                 f"(k >= 1), got {self.frequency_hz!r}")
+                raise ValueError(
+                    f"stage frequency_hz must be a number [Hz], 'mode k' or 'ranked k' "
+                    f"(k >= 1), got {self.frequency_hz!r}"
+                )
             if self.frequency_end_hz is not None:
-                raise ValueError(f"a stage at {self.frequency_hz!r} cannot ramp its frequency "
-                                 "(frequency_end_hz)")
+                raise ValueError(
+                    f"a stage at {self.frequency_hz!r} cannot ramp its frequency (frequency_end_hz)"
+                )
         elif not self.frequency_hz >= 0:
             raise ValueError(f"stage frequency_hz must be >= 0 Hz, got {self.frequency_hz}")
         if self.frequency_end_hz is not None and not self.frequency_end_hz >= 0:
             raise ValueError(f"stage frequency_end_hz must be >= 0 Hz, got {self.frequency_end_hz}")
         if isinstance(self.amplitude_N, str):
             if self.amplitude_N != "eccentric":
-                raise ValueError(f"stage amplitude_N must be a force [N] or 'eccentric', got {self.amplitude_N!r}")
+                raise ValueError(
+                    f"stage amplitude_N must be a force [N] or 'eccentric', got {self.amplitude_N!r}"
+                )
             if self.amplitude_end_N is not None:
-                raise ValueError("amplitude_end_N cannot be combined with the 'eccentric' amplitude law")
+                raise ValueError(
+                    "amplitude_end_N cannot be combined with the 'eccentric' amplitude law"
+                )
         elif not self.amplitude_N >= 0:
             raise ValueError(f"stage amplitude_N must be >= 0 N, got {self.amplitude_N}")
         if self.amplitude_end_N is not None and not self.amplitude_end_N >= 0:
@@ -145,7 +156,9 @@ class Stage:
         if self.direction not in DIRECTIONS:
             raise ValueError(f"stage direction must be one of {DIRECTIONS}, got {self.direction!r}")
         if not 0 <= self.lateral_fraction <= 1:
-            raise ValueError(f"stage lateral_fraction must lie in [0, 1], got {self.lateral_fraction}")
+            raise ValueError(
+                f"stage lateral_fraction must lie in [0, 1], got {self.lateral_fraction}"
+            )
 
     @property
     def mode_number(self) -> int | None:
@@ -185,12 +198,18 @@ class Stage:
         angle = math.radians(self.lateral_angle_deg)
         lateral = np.array([math.cos(angle), math.sin(angle), 0.0])
         axial = np.array([0.0, 0.0, 1.0])
-        return {"axial": axial, "lateral": lateral, "both": axial + self.lateral_fraction * lateral}[self.direction]
+        return {
+            "axial": axial,
+            "lateral": lateral,
+            "both": axial + self.lateral_fraction * lateral,
+        }[self.direction]
 
     def _f0(self) -> float:
         if isinstance(self.frequency_hz, str):
-            raise ValueError(f"stage at {self.frequency_hz!r}: natural frequencies not filled in yet "
-                             "(Schedule.with_natural_frequencies)")
+            raise ValueError(
+                f"stage at {self.frequency_hz!r}: natural frequencies not filled in yet "
+                "(Schedule.with_natural_frequencies)"
+            )
         return self.frequency_hz
 
 
@@ -211,19 +230,30 @@ class Schedule:
     def from_dicts(cls, stages: Sequence[dict[str, Any]], start_s: float = 0.0) -> "Schedule":
         """Schedule from a list of tables (the ``[[schedule]]`` array of a TOML case)."""
         if not isinstance(stages, (list, tuple)):
-            raise ValueError(f"[[schedule]] must be a list of stage tables, got {type(stages).__name__}")
-        return cls([construct(Stage, dict(s), f"schedule stage {i + 1}") for i, s in enumerate(stages)], start_s)
+            raise ValueError(
+                f"[[schedule]] must be a list of stage tables, got {type(stages).__name__}"
+            )
+        return cls(
+            [construct(Stage, dict(s), f"schedule stage {i + 1}") for i, s in enumerate(stages)],
+            start_s,
+        )
 
-    def with_natural_frequencies(self, frequencies_hz: Sequence[float],
-                                 ranked_hz: Sequence[float] = ()) -> "Schedule":
+    def with_natural_frequencies(
+        self, frequencies_hz: Sequence[float], ranked_hz: Sequence[float] = ()
+    ) -> "Schedule":
         """Copy with every 'mode k' stage set to frequencies_hz[k - 1] and every 'ranked k'
         stage to ranked_hz[k - 1] [Hz]."""
         stages = []
         for s in self.stages:
-            for k, known, what in ((s.mode_number, frequencies_hz, "mode"), (s.ranked_number, ranked_hz, "ranked")):
+            for k, known, what in (
+                (s.mode_number, frequencies_hz, "mode"),
+                (s.ranked_number, ranked_hz, "ranked"),
+            ):
                 if k is not None:
                     if not 1 <= k <= len(known):
-                        raise ValueError(f"stage asks for {what} {k}, but {len(known)} {what} frequencies are known")
+                        raise ValueError(
+                            f"stage asks for {what} {k}, but {len(known)} {what} frequencies are known"
+                        )
                     s = replace(s, frequency_hz=float(known[k - 1]))
             stages.append(s)
         return Schedule(stages, self.start_s)
@@ -360,20 +390,35 @@ class TPLoading:
             point.add(schedule.force(t), out)
 
 
-def frequency_steps(f_start_hz: float, f_stop_hz: float, f_step_hz: float, dwell_s: float,
-                    amplitude_N: float | str = "eccentric", **stage_options: Any) -> list[Stage]:
+def frequency_steps(
+    f_start_hz: float,
+    f_stop_hz: float,
+    f_step_hz: float,
+    dwell_s: float,
+    amplitude_N: float | str = "eccentric",
+    **stage_options: Any,
+) -> list[Stage]:
     """Step-wise frequency increase: f_start, f_start + f_step, ... up to f_stop [Hz] (included
     when it is on the grid), each held ``dwell_s`` [s] (SPEC 3: 10 -> 130 Hz in 10 Hz steps of
     0.5 s with the eccentric amplitude). ``stage_options``: direction, lateral_fraction, ..."""
     if not (f_start_hz > 0 and f_step_hz > 0 and f_stop_hz >= f_start_hz):
-        raise ValueError(f"need 0 < f_start <= f_stop and f_step > 0, got f_start = {f_start_hz} Hz, "
-                         f"f_stop = {f_stop_hz} Hz, f_step = {f_step_hz} Hz")
+        raise ValueError(
+            f"need 0 < f_start <= f_stop and f_step > 0, got f_start = {f_start_hz} Hz, "
+            f"f_stop = {f_stop_hz} Hz, f_step = {f_step_hz} Hz"
+        )
     n = int(math.floor((f_stop_hz - f_start_hz) / f_step_hz + 1e-9)) + 1
-    return [Stage(dwell_s, f_start_hz + k * f_step_hz, amplitude_N, **stage_options) for k in range(n)]
+    return [
+        Stage(dwell_s, f_start_hz + k * f_step_hz, amplitude_N, **stage_options) for k in range(n)
+    ]
 
 
-def frequency_ramp(f_start_hz: float, f_stop_hz: float, duration_s: float,
-                   amplitude_N: float | str = "eccentric", **stage_options: Any) -> list[Stage]:
+def frequency_ramp(
+    f_start_hz: float,
+    f_stop_hz: float,
+    duration_s: float,
+    amplitude_N: float | str = "eccentric",
+    **stage_options: Any,
+) -> list[Stage]:
     """A slow linear frequency ramp f_start -> f_stop [Hz] over ``duration_s`` [s] (SPEC 3:
     0 -> 125 Hz over 13 to 200 s), as one stage (the phase stays continuous)."""
     return [Stage(duration_s, f_start_hz, amplitude_N, frequency_end_hz=f_stop_hz, **stage_options)]

@@ -20,15 +20,8 @@ operator only with preconditioned vectors z = P^-1 v, P = A + J_P the factorised
 With a ``zone`` (the condensed system of ``solver.dynamics.condensation``, identity rows off the zone)
 only the zone block of A + J is factorised.
 
-The corrections are inexact Newton steps (Eisenstat and Walker 1996, choice 2): GMRES
-stops at ||F + (A + J_c) du|| <= eta_k ||F||, with eta_0 = 0.5 tol / ||F_0|| (tol: the
-Newton tolerance; a nearly linear step, e.g. a quiet vibration step, then converges in
-one iteration) and
-eta_k = 0.9 (||F_k|| / ||F_{k-1}||)^2, safeguarded by 0.9 eta_{k-1}^2 when that exceeds
-0.1, capped at ``forcing_max``, and never tighter than needed to reach the Newton
-tolerance (0.5 tol / ||F_k||) nor than ``krylov_rtol``. Far from the solution a few GMRES
-iterations suffice; near it eta_k = O(||F_k||) keeps the rate quadratic. With
-``forcing_max = 0`` every correction is solved to ``krylov_rtol`` (exact Newton). The
+The corrections are inexact Newton steps: GMRES stops at ||F + (A + J_c) du|| <= eta_k ||F||
+with the Eisenstat-Walker forcing term of ``solver.dynamics.linear_algebra.forcing_term``. The
 workspace (and its factorisation) can be kept across steps while A is unchanged.
 """
 
@@ -44,7 +37,7 @@ import dolfinx
 
 from solver.contact.model import ContactModel
 from solver.dynamics.factor_store import Factors, FactorStore
-from solver.dynamics.linear_algebra import BlockLU, SumOperator
+from solver.dynamics.linear_algebra import BlockLU, SumOperator, forcing_term
 
 __all__ = ["ContactNewtonSolver", "NewtonResult", "solve_contact_problem"]
 
@@ -97,8 +90,8 @@ class ContactNewtonSolver:
             next correction after more than half of them); 0 factorises A + J_c at every
             Newton iteration (plain Newton with direct solves).
         krylov_rtol: tightest relative tolerance of the GMRES correction solves.
-        forcing_max: largest GMRES relative tolerance (Eisenstat-Walker forcing term, see the
-            module docstring); 0: every correction to krylov_rtol.
+        forcing_max: largest GMRES relative tolerance (Eisenstat-Walker forcing term,
+            ``forcing_term``); 0: every correction to krylov_rtol.
         lu_solver: PETSc factorisation package ("mumps", "superlu_dist", "petsc").
         max_backtracks: step halvings when a Newton step increases ||F|| (0: plain Newton).
         max_gap_change: if given [m], damp each Newton step so that no slave point's gap decreases
@@ -167,8 +160,16 @@ class ContactNewtonSolver:
             imap, bs = bc.function_space.dofmap.index_map, bc.function_space.dofmap.index_map_bs
             owned = dofs[dofs < imap.size_local * bs]
             rows.append(imap.local_to_global(owned // bs) * bs + owned % bs)
-        self._bc_rows = np.unique(np.concatenate(rows)).astype(PETSc.IntType) if rows else np.zeros(0, PETSc.IntType)
-        self._bc_local = np.unique(np.concatenate([bc.dof_indices()[0] for bc in bcs])) if bcs else np.zeros(0, np.int32)
+        self._bc_rows = (
+            np.unique(np.concatenate(rows)).astype(PETSc.IntType)
+            if rows
+            else np.zeros(0, PETSc.IntType)
+        )
+        self._bc_local = (
+            np.unique(np.concatenate([bc.dof_indices()[0] for bc in bcs]))
+            if bcs
+            else np.zeros(0, np.int32)
+        )
         self.bcs = bcs
         comm = A.getComm()
         self._comm = comm.tompi4py()
@@ -183,7 +184,9 @@ class ContactNewtonSolver:
         self._store = FactorStore(A, zone, lu_solver, factorisations_kept)
         pc = self.ksp.getPC()
         pc.setType(PETSc.PC.Type.PYTHON)
-        self._preconditioner = BlockLU(None, None if zone is None else zone.getIndices() - A.getOwnershipRange()[0])
+        self._preconditioner = BlockLU(
+            None, None if zone is None else zone.getIndices() - A.getOwnershipRange()[0]
+        )
         pc.setPythonContext(self._preconditioner)
         self._current: Factors | None = None  # the factors of the last correction
         self._bc_rows_hit: tuple | None = None  # (coo_pattern tag, whether J has Dirichlet rows)
@@ -206,21 +209,15 @@ class ContactNewtonSolver:
         self._current = factors
         self._preconditioner.lu = factors.lu
 
-    def _forcing(self, norms: list[float], eta_old: float, tol: float) -> float:
-        """GMRES relative tolerance of the next correction (Eisenstat-Walker choice 2, safeguarded)."""
-        if self.forcing_max == 0.0:
-            return self.krylov_rtol
-        if len(norms) == 1:  # aim at the Newton tolerance, as for a linear problem (quiet steps: one iteration)
-            eta = 0.5 * tol / norms[0]
-        else:
-            eta = 0.9 * (norms[-1] / norms[-2]) ** 2
-            if 0.9 * eta_old**2 > 0.1:
-                eta = max(eta, 0.9 * eta_old**2)
-        eta = min(eta, self.forcing_max)
-        return max(eta, 0.5 * tol / norms[-1], self.krylov_rtol)
-
-    def _correction(self, J: PETSc.Mat, status: np.ndarray, F: PETSc.Vec, du: PETSc.Vec, timings: dict,
-                    eta: float) -> int:
+    def _correction(
+        self,
+        J: PETSc.Mat,
+        status: np.ndarray,
+        F: PETSc.Vec,
+        du: PETSc.Vec,
+        timings: dict,
+        eta: float,
+    ) -> int:
         """Solve (A + J) du = -F to GMRES relative tolerance eta, preconditioned by the kept factors
         nearest the contact ``status`` of J; returns GMRES iterations (refactorising when needed).
 
@@ -234,7 +231,9 @@ class ContactNewtonSolver:
         self.ksp.setTolerances(rtol=eta)
         t0 = time.perf_counter()
         self._use(self._store.factorise(J, status) if fresh else self._store.nearest(status))
-        operator = SumOperator(self.A, J, self._current.J_P, self._preconditioner, self._difference(J, fresh))
+        operator = SumOperator(
+            self.A, J, self._current.J_P, self._preconditioner, self._difference(J, fresh)
+        )
         op = PETSc.Mat().createPython(self.A.getSizes(), operator, comm=self.A.getComm())
         op.setUp()
         self.ksp.setOperators(op)
@@ -288,11 +287,20 @@ class ContactNewtonSolver:
             hit = self._comm.allreduce(bool(np.intersect1d(rows, self._bc_rows).size), op=MPI.LOR)
             self._bc_rows_hit = (pattern, hit)
         if self._bc_rows_hit[1]:
-            J.setOption(PETSc.Mat.Option.KEEP_NONZERO_PATTERN, True)  # J's owner refills this pattern
+            J.setOption(
+                PETSc.Mat.Option.KEEP_NONZERO_PATTERN, True
+            )  # J's owner refills this pattern
             J.zeroRows(self._bc_rows, diag=0.0)
 
-    def _residual(self, linear: PETSc.Vec, contact: ContactModel, u: dolfinx.fem.Function, F: PETSc.Vec,
-                  timings: dict, update: bool = True) -> float:
+    def _residual(
+        self,
+        linear: PETSc.Vec,
+        contact: ContactModel,
+        u: dolfinx.fem.Function,
+        F: PETSc.Vec,
+        timings: dict,
+        update: bool = True,
+    ) -> float:
         """F = linear + r_c(u) with linear = A u - b (contact updated at u unless ``update`` is
         False, zero on Dirichlet rows); returns ||F||."""
         t0 = time.perf_counter()
@@ -318,7 +326,9 @@ class ContactNewtonSolver:
         step.linear.axpy(alpha, step.A_du)  # A u - b = (A x0 - b) + alpha A du
         return self._residual(step.linear, contact, u, F, timings)
 
-    def _newton_step(self, step: "_Step", contact, u, F, norm: float, timings: dict) -> tuple[float, float]:
+    def _newton_step(
+        self, step: "_Step", contact, u, F, norm: float, timings: dict
+    ) -> tuple[float, float]:
         """Save u in x0 and take the Newton step, shortened by the gap limit; if that does not lower
         ||F|| (= norm at x0) and some slipping point's friction would reverse on the way, shortened
         to where the first one would. Returns (alpha, ||F||) of the step taken."""
@@ -329,7 +339,9 @@ class ContactNewtonSolver:
         slip = contact.slip_directions() if self.limit_reversal and self.max_backtracks else None
         trial = self._trial(step, contact, u, 1.0, F, timings)
         alpha = 1.0 if gap is None else self._gap_limited_step(gap, contact.state.gap)
-        reversal = 1.0 if slip is None else self._comm.allreduce(contact.reversal_limit(*slip), op=MPI.MIN)
+        reversal = (
+            1.0 if slip is None else self._comm.allreduce(contact.reversal_limit(*slip), op=MPI.MIN)
+        )
         if alpha < 1.0:
             trial = self._trial(step, contact, u, alpha, F, timings)
         if trial >= norm and reversal < alpha:
@@ -337,8 +349,9 @@ class ContactNewtonSolver:
             trial = self._trial(step, contact, u, alpha, F, timings)
         return alpha, trial
 
-    def _backtrack(self, step: "_Step", contact, u, F, norm: float, alpha: float, trial: float,
-                   timings: dict) -> float:
+    def _backtrack(
+        self, step: "_Step", contact, u, F, norm: float, alpha: float, trial: float, timings: dict
+    ) -> float:
         """From the step x0 + alpha du (||F|| = trial there), halve the step (up to ``max_backtracks``
         times) while ||F|| >= norm. Generalized Newton on stick/slip/open switches can cycle (e.g.
         with velocity-weakening friction); backtracking breaks such cycles. If no trial step
@@ -365,8 +378,13 @@ class ContactNewtonSolver:
         worst = self._comm.allreduce(float(ratio.max()) if ratio.size else 0.0, op=MPI.MAX)
         return 1.0 if worst <= 1.0 else 1.0 / worst
 
-    def solve(self, b: PETSc.Vec, contact: ContactModel, u: dolfinx.fem.Function,
-              load_norm: float | None = None) -> NewtonResult:
+    def solve(
+        self,
+        b: PETSc.Vec,
+        contact: ContactModel,
+        u: dolfinx.fem.Function,
+        load_norm: float | None = None,
+    ) -> NewtonResult:
         """Solve A u + r_c(u) = b for u (initial guess: u on entry, Dirichlet values imposed).
 
         ``load_norm``: the ||b|| [N] of the relative tolerance (default: ||b||; the condensed
@@ -381,7 +399,12 @@ class ContactNewtonSolver:
         self.A.mult(x, step.linear)
         step.linear.axpy(-1.0, b)
         norms, linear = [], []
-        timings = {"contact update": 0.0, "contact assembly": 0.0, "factorise": 0.0, "linear solve": 0.0}
+        timings = {
+            "contact update": 0.0,
+            "contact assembly": 0.0,
+            "factorise": 0.0,
+            "linear solve": 0.0,
+        }
         b_norm = b.norm() if load_norm is None else load_norm
         factorizations0 = self.factorizations
         result = None
@@ -392,33 +415,55 @@ class ContactNewtonSolver:
         for k in range(self.max_iterations + 1):
             norms.append(norm)
             if not np.isfinite(norm):
-                result = NewtonResult(False, k, norms, linear, message=f"residual is not finite at iteration {k}")
+                result = NewtonResult(
+                    False, k, norms, linear, message=f"residual is not finite at iteration {k}"
+                )
                 break
             tol = max(self.atol, self.rtol * max(norms[0], b_norm), contact.residual_floor())
             if norm <= tol or step_small:
                 result = NewtonResult(True, k, norms, linear)
                 break
             if k == self.max_iterations:
-                result = NewtonResult(False, k, norms, linear, message=f"no convergence in {k} Newton iterations (||F|| = {norm:.3e} N)")
+                result = NewtonResult(
+                    False,
+                    k,
+                    norms,
+                    linear,
+                    message=f"no convergence in {k} Newton iterations (||F|| = {norm:.3e} N)",
+                )
                 break
             best = int(np.argmin(norms))
             if self.stall_iterations and k - best >= self.stall_iterations:
-                result = NewtonResult(False, k, norms, linear, message=f"||F|| not decreasing: smallest {norms[best]:.3e} N at "
-                                      f"iteration {best}, now {norm:.3e} N at iteration {k}")
+                result = NewtonResult(
+                    False,
+                    k,
+                    norms,
+                    linear,
+                    message=f"||F|| not decreasing: smallest {norms[best]:.3e} N at "
+                    f"iteration {best}, now {norm:.3e} N at iteration {k}",
+                )
                 break
             t0 = time.perf_counter()
             J = contact.jacobian()  # the contact's matrix: not ours to destroy
             self._clear_bc_rows(J)
             timings["contact assembly"] += time.perf_counter() - t0
             try:
-                eta = self._forcing(norms, eta, tol)
+                eta = forcing_term(norms, eta, tol, self.forcing_max, self.krylov_rtol)
                 linear.append(self._correction(J, contact.state.status, F, step.du, timings, eta))
             except (PETSc.Error, RuntimeError) as err:
-                result = NewtonResult(False, k, norms, linear, message=f"linear solve failed at Newton iteration {k}: {err}")
+                result = NewtonResult(
+                    False,
+                    k,
+                    norms,
+                    linear,
+                    message=f"linear solve failed at Newton iteration {k}: {err}",
+                )
                 break
             alpha, trial = self._newton_step(step, contact, u, F, norm, timings)
             norm = self._backtrack(step, contact, u, F, norm, alpha, trial, timings)
-            step_small = step.du.norm(PETSc.NormType.INFINITY) <= self.stol * x.norm(PETSc.NormType.INFINITY)
+            step_small = step.du.norm(PETSc.NormType.INFINITY) <= self.stol * x.norm(
+                PETSc.NormType.INFINITY
+            )
         for vec in (F, *step.__dict__.values()):
             vec.destroy()
         result.factorizations = self.factorizations - factorizations0

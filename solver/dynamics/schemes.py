@@ -47,7 +47,9 @@ class GeneralisedAlpha:
         if not 0.5 <= self.gamma <= 1.5:
             raise ValueError(f"Newmark gamma must lie in [0.5, 1.5], got {self.gamma}")
         if not 0 <= self.alpha_f < 1 or not -1 <= self.alpha_m < 1:
-            raise ValueError(f"need 0 <= alpha_f < 1 and -1 <= alpha_m < 1, got {self.alpha_f}, {self.alpha_m}")
+            raise ValueError(
+                f"need 0 <= alpha_f < 1 and -1 <= alpha_m < 1, got {self.alpha_f}, {self.alpha_m}"
+            )
 
     @classmethod
     def from_spectral_radius(cls, rho_inf: float) -> "GeneralisedAlpha":
@@ -57,7 +59,9 @@ class GeneralisedAlpha:
         alpha_m = (2 * rho_inf - 1) / (rho_inf + 1)
         alpha_f = rho_inf / (rho_inf + 1)
         gamma = 0.5 - alpha_m + alpha_f
-        return cls(beta=0.25 * (1 - alpha_m + alpha_f) ** 2, gamma=gamma, alpha_m=alpha_m, alpha_f=alpha_f)
+        return cls(
+            beta=0.25 * (1 - alpha_m + alpha_f) ** 2, gamma=gamma, alpha_m=alpha_m, alpha_f=alpha_f
+        )
 
     @property
     def dynamic(self) -> bool:

@@ -159,7 +159,9 @@ class InstallationCase:
             "mesh": asdict(self.mesh),
             "friction": asdict(self.friction),
             **{name: asdict(getattr(self, name)) for name in SECTIONS},
-            "schedule": None if self.schedule is None else [asdict(s) for s in self.schedule.stages],
+            "schedule": None
+            if self.schedule is None
+            else [asdict(s) for s in self.schedule.stages],
             "imperfections": {k: asdict(v) for k, v in self.imperfections.items()},
         }
         return json.loads(json.dumps(out))
@@ -176,7 +178,9 @@ class InstallationCase:
             path = setting.path(case_dir)
             if path is not None:
                 flat.pop(f"imperfections.{name}.file")
-                flat[f"imperfections.{name}.file_sha256"] = hashlib.sha256(path.read_bytes()).hexdigest()
+                flat[f"imperfections.{name}.file_sha256"] = hashlib.sha256(
+                    path.read_bytes()
+                ).hexdigest()
         return flat
 
 

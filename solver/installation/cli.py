@@ -39,33 +39,71 @@ NAMED = {
     "forcing": ("vibration.forcing", str, "vibration force at: eccentric | face | shaker"),
     "direction": ("vibration.direction", str, "vibration force direction: axial | lateral | both"),
     "lateral_fraction": ("vibration.lateral_fraction", float, "lateral part with --direction both"),
-    "amplitude": ("vibration.amplitude_N", float, "force amplitude of the modal/control stages [N]"),
-    "shaker_height": ("vibration.shaker_height_m", float, "shaker: height above the TP lower end [m]"),
+    "amplitude": (
+        "vibration.amplitude_N",
+        float,
+        "force amplitude of the modal/control stages [N]",
+    ),
+    "shaker_height": (
+        "vibration.shaker_height_m",
+        float,
+        "shaker: height above the TP lower end [m]",
+    ),
     "angle": ("vibration.angle_deg", float, "circumferential position of the point force [deg]"),
     "stage_duration": ("vibration.stage_duration_s", float, "duration of each vibration stage [s]"),
-    "n_frequencies": ("vibration.n_frequencies", int, "number of ranked natural frequencies excited"),
+    "n_frequencies": (
+        "vibration.n_frequencies",
+        int,
+        "number of ranked natural frequencies excited",
+    ),
     "steps_per_period": ("time.steps_per_period", int, "time steps per excitation period"),
 }
 #: the named options of the installation-type demos that add options of their own
-INSTALLATION_OPTIONS = ("mesh_size", "n_circumferential", "mu_s", "mu_d", "d_c", "damping", "forcing",
-                        "direction", "steps_per_period")
+INSTALLATION_OPTIONS = (
+    "mesh_size",
+    "n_circumferential",
+    "mu_s",
+    "mu_d",
+    "d_c",
+    "damping",
+    "forcing",
+    "direction",
+    "steps_per_period",
+)
 
 
-def case_parser(description: str, output: str, default_case: str, quick_case: str) -> argparse.ArgumentParser:
+def case_parser(
+    description: str, output: str, default_case: str, quick_case: str
+) -> argparse.ArgumentParser:
     """``--case``, ``--set``, ``--quick`` and ``--output``: the options of every demo."""
     p = argparse.ArgumentParser(description=description)
     p.set_defaults(default_case=default_case, quick_case=quick_case, named=())
-    p.add_argument("--case", help=f"case: a preset name in cases/ or a TOML file (default: {default_case})")
-    p.add_argument("--set", action="append", default=[], metavar="TABLE.KEY=VALUE",
-                   help="override a case entry, e.g. friction.mu_s=0.3 (repeatable)")
-    p.add_argument("--quick", action="store_true",
-                   help=f"smoke run: --case {quick_case} (what CTest runs; not physics)")
+    p.add_argument(
+        "--case", help=f"case: a preset name in cases/ or a TOML file (default: {default_case})"
+    )
+    p.add_argument(
+        "--set",
+        action="append",
+        default=[],
+        metavar="TABLE.KEY=VALUE",
+        help="override a case entry, e.g. friction.mu_s=0.3 (repeatable)",
+    )
+    p.add_argument(
+        "--quick",
+        action="store_true",
+        help=f"smoke run: --case {quick_case} (what CTest runs; not physics)",
+    )
     p.add_argument("--output", default=output, help=f"output folder (default: {output})")
     return p
 
 
-def parser(description: str, output: str, default_case: str, quick_case: str,
-           named: Iterable[str] = INSTALLATION_OPTIONS) -> argparse.ArgumentParser:
+def parser(
+    description: str,
+    output: str,
+    default_case: str,
+    quick_case: str,
+    named: Iterable[str] = INSTALLATION_OPTIONS,
+) -> argparse.ArgumentParser:
     """The options of the installation-type demos: ``case_parser``'s, the ``named`` shorthands
     and ``--no-progress``; a demo adds its own."""
     p = case_parser(description, output, default_case, quick_case)
@@ -82,12 +120,19 @@ def case_name(args: argparse.Namespace) -> str:
     demo's default (ValueError for ``--quick`` with another ``--case``)."""
     if not args.quick:
         return args.case or args.default_case
-    if args.case is not None and resolve_case_path(args.case).resolve() != resolve_case_path(args.quick_case).resolve():
-        raise ValueError(f"--quick is --case {args.quick_case}; it cannot be combined with --case {args.case}")
+    if (
+        args.case is not None
+        and resolve_case_path(args.case).resolve() != resolve_case_path(args.quick_case).resolve()
+    ):
+        raise ValueError(
+            f"--quick is --case {args.quick_case}; it cannot be combined with --case {args.case}"
+        )
     return args.quick_case
 
 
-def overrides(args: argparse.Namespace, before: Iterable[str] = (), after: Iterable[str] = ()) -> list[str]:
+def overrides(
+    args: argparse.Namespace, before: Iterable[str] = (), after: Iterable[str] = ()
+) -> list[str]:
     """Case overrides: a demo's ``before`` the named options and --set (which win over them), then
     the named options, --set, and a demo's ``after`` them (which win over --set)."""
     items = list(before)
@@ -99,13 +144,19 @@ def overrides(args: argparse.Namespace, before: Iterable[str] = (), after: Itera
     return items + list(args.set) + list(after)
 
 
-def read(args: argparse.Namespace, before: Iterable[str] = (), after: Iterable[str] = ()) -> dict[str, Any]:
+def read(
+    args: argparse.Namespace, before: Iterable[str] = (), after: Iterable[str] = ()
+) -> dict[str, Any]:
     """The case dict of the command line (ValueError on any problem)."""
     return read_case(case_name(args), overrides(args, before, after))
 
 
-def load_case(args: argparse.Namespace, before: Iterable[str] = (), after: Iterable[str] = (),
-              edit: Callable[[dict[str, Any]], None] | None = None) -> InstallationCase:
+def load_case(
+    args: argparse.Namespace,
+    before: Iterable[str] = (),
+    after: Iterable[str] = (),
+    edit: Callable[[dict[str, Any]], None] | None = None,
+) -> InstallationCase:
     """The checked installation case (ValueError on any problem); ``edit`` may change the case
     dict first (e.g. put in a generated [[schedule]])."""
     data = read(args, before, after)
@@ -126,7 +177,9 @@ def prepare_output(comm: MPI.Comm, folder: str | Path) -> Path:
             probe.write_text("")
             probe.unlink()
         except OSError as e:
-            problem = f"output folder {str(folder)!r} cannot be created or written: {e.strerror or e}"
+            problem = (
+                f"output folder {str(folder)!r} cannot be created or written: {e.strerror or e}"
+            )
     problem = comm.bcast(problem, root=0)
     if problem is not None:
         raise ValueError(problem)
@@ -140,8 +193,13 @@ def fail(comm: MPI.Comm, message: str) -> int:
     return 2
 
 
-def run(comm: MPI.Comm, case: InstallationCase, output: str | Path, progress: bool = True,
-        log: Callable[[str], None] | None = None) -> tuple[Installation, int]:
+def run(
+    comm: MPI.Comm,
+    case: InstallationCase,
+    output: str | Path,
+    progress: bool = True,
+    log: Callable[[str], None] | None = None,
+) -> tuple[Installation, int]:
     """Run the installation pipeline of ``case``; returns the runner and the exit code
     (0 done, 1 stopped: the time loop gave up, or the modal stage found fewer ranked
     frequencies than the schedule asks for; results up to there are in ``output``)."""
@@ -150,8 +208,11 @@ def run(comm: MPI.Comm, case: InstallationCase, output: str | Path, progress: bo
         runner.run()
     except (RuntimeError, ValueError) as e:  # Newton failed at the minimum step; a 'ranked k'
         if comm.rank == 0:  # stage beyond the frequencies the modal stage found
-            print(f"\nrun stopped: {e}\nresults up to this point are in {output}",
-                  file=sys.stderr, flush=True)
+            print(
+                f"\nrun stopped: {e}\nresults up to this point are in {output}",
+                file=sys.stderr,
+                flush=True,
+            )
         return runner, 1
     return runner, 0
 

@@ -87,9 +87,13 @@ def dismount_case(case: dict[str, Any], plan: DismountPlan) -> None:
     The ranked frequencies come from the modal stage after self-weight, so
     ``vibration.n_frequencies`` is raised to the number of ranked stages if needed.
     """
+
     def ranked(k: int) -> dict[str, Any]:
-        return {"duration_s": plan.stage_duration_s, "frequency_hz": f"ranked {k}",
-                "amplitude_N": plan.amplitude_N}
+        return {
+            "duration_s": plan.stage_duration_s,
+            "frequency_hz": f"ranked {k}",
+            "amplitude_N": plan.amplitude_N,
+        }
 
     def still(duration: float) -> dict[str, Any]:
         return {"duration_s": duration, "frequency_hz": 0.0, "amplitude_N": 0.0}

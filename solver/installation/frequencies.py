@@ -41,8 +41,16 @@ MIN_FREQUENCY_HZ = 1.0  #: modes below this are not excited [Hz]
 
 def _modal(record: ModeRecord, settings: VibrationSettings, reason: str) -> Excitation:
     """The excitation of a chosen mode at the modal stages' amplitude."""
-    return Excitation(record.frequency_Hz, settings.amplitude_N, "modal", record.mode, record.m,
-                      record.n, record.rank, reason)
+    return Excitation(
+        record.frequency_Hz,
+        settings.amplitude_N,
+        "modal",
+        record.mode,
+        record.m,
+        record.n,
+        record.rank,
+        reason,
+    )
 
 
 def choose_frequencies(records: list[ModeRecord], settings: VibrationSettings) -> list[Excitation]:
@@ -70,8 +78,9 @@ def choose_frequencies(records: list[ModeRecord], settings: VibrationSettings) -
     chosen: list[Excitation] = []
 
     def same_pair(r: ModeRecord) -> bool:  # the partner of a degenerate pair (or a near-tie)
-        return any(abs(r.frequency_Hz - c.frequency_Hz) <= PAIR_TOLERANCE * c.frequency_Hz
-                   for c in chosen)
+        return any(
+            abs(r.frequency_Hz - c.frequency_Hz) <= PAIR_TOLERANCE * c.frequency_Hz for c in chosen
+        )
 
     for r in sorted(candidates, key=lambda r: (r.rank, r.mode)):
         if len(chosen) >= settings.n_frequencies:
@@ -79,18 +88,29 @@ def choose_frequencies(records: list[ModeRecord], settings: VibrationSettings) -
         if same_pair(r):
             continue
         chosen.append(
-            _modal(r, settings, f"rank {r.rank} of {len({x.rank for x in records})}: resonant "
-                   f"interface slip {max(r.resonant_slip_axial_um, r.resonant_slip_lateral_um):.3g} um")
+            _modal(
+                r,
+                settings,
+                f"rank {r.rank} of {len({x.rank for x in records})}: resonant "
+                f"interface slip {max(r.resonant_slip_axial_um, r.resonant_slip_lateral_um):.3g} um",
+            )
         )
     m2n1 = [r for r in modes if (r.m, r.n) == (2, 1)]
     if settings.m2n1_mode and m2n1 and all((c.m, c.n) != (2, 1) for c in chosen):
         r = min(m2n1, key=lambda r: r.frequency_Hz)
         if not same_pair(r):
-            above = (f", above the ranked choice's {settings.max_frequency_hz:g} Hz"
-                     if r.frequency_Hz > settings.max_frequency_hz else "")
+            above = (
+                f", above the ranked choice's {settings.max_frequency_hz:g} Hz"
+                if r.frequency_Hz > settings.max_frequency_hz
+                else ""
+            )
             chosen.append(
-                _modal(r, settings, f"lowest m = 2, n = 1 mode (SPEC 5.4: most effective in the "
-                       f"experiments{above})")
+                _modal(
+                    r,
+                    settings,
+                    f"lowest m = 2, n = 1 mode (SPEC 5.4: most effective in the "
+                    f"experiments{above})",
+                )
             )
     chosen.sort(key=lambda e: e.frequency_Hz)
     if settings.control and chosen:

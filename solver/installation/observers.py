@@ -64,5 +64,6 @@ class ContactZoneGuard:
             raise RuntimeError(
                 f"at t = {problem.t:.6g} s the contact band reached the top of the contact zone "
                 f"({self.zone_above} m above the TP's lower edge), where the contact surfaces end: "
-                "rerun with a larger mesh.contact_zone_above")
+                "rerun with a larger mesh.contact_zone_above"
+            )
         return {}

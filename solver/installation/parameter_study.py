@@ -15,7 +15,6 @@ from dataclasses import dataclass
 from typing import Any
 
 
-
 @dataclass(frozen=True)
 class Variant:
     """A case varied in one parameter from the base case."""
@@ -30,14 +29,23 @@ def variants(base_axial_size: float) -> list[Variant]:
     """The SPEC variants, each varied alone from the base case (reference friction 0.5/0.4,
     d_c = 100 s/m, Rayleigh damping, axial element size ``base_axial_size`` [m])."""
     return [
-        Variant("base", "base", "mu 0.5/0.4, d_c 100 s/m, rayleigh, "
-                f"{1e3 * base_axial_size:.0f} mm"),
-        Variant("low_friction", "friction", "mu_s/mu_d 0.0625/0.05",
-                ("friction.mu_s=0.0625", "friction.mu_d=0.05")),
+        Variant(
+            "base", "base", f"mu 0.5/0.4, d_c 100 s/m, rayleigh, {1e3 * base_axial_size:.0f} mm"
+        ),
+        Variant(
+            "low_friction",
+            "friction",
+            "mu_s/mu_d 0.0625/0.05",
+            ("friction.mu_s=0.0625", "friction.mu_d=0.05"),
+        ),
         Variant("slow_decay", "d_c", "d_c 1 s/m", ("friction.d_c=1.0",)),
         Variant("modal_damping", "damping", "modal", ("damping.model='modal'",)),
-        Variant("fine_mesh", "mesh size", f"{0.5e3 * base_axial_size:.0f} mm axially",
-                (f"mesh.axial_size={0.5 * base_axial_size}",)),
+        Variant(
+            "fine_mesh",
+            "mesh size",
+            f"{0.5e3 * base_axial_size:.0f} mm axially",
+            (f"mesh.axial_size={0.5 * base_axial_size}",),
+        ),
     ]
 
 
@@ -69,8 +77,9 @@ SUMMARY_COLUMNS = [
 ]
 
 
-def summary_rows(variant: Variant, stages: list[dict[str, Any]], excitations, status: str
-                 ) -> list[dict[str, Any]]:
+def summary_rows(
+    variant: Variant, stages: list[dict[str, Any]], excitations, status: str
+) -> list[dict[str, Any]]:
     """One row per stage of a variant's run (``Installation.stages``), with the role of each
     vibration stage (modal / control / ...) from ``Installation.excitations``."""
     roles = ["self-weight"] + [e.role for e in excitations]

@@ -28,7 +28,9 @@ from solver.dynamics.schemes import GeneralisedAlpha, Scheme, scheme_from_name
 from solver.installation.frequencies import Excitation
 from solver.installation.settings import DampingSettings, TimeSettings
 
-ALGORITHMIC_SHARE = 0.1  #: largest algorithmic damping of a vibration stage / physical damping ratio [-]
+ALGORITHMIC_SHARE = (
+    0.1  #: largest algorithmic damping of a vibration stage / physical damping ratio [-]
+)
 
 
 @dataclass
@@ -64,8 +66,10 @@ def check_time_scheme(time: TimeSettings, damping: DampingSettings) -> None:
     the modal ratio)."""
     scheme = scheme_from_name(time.scheme, time.rho_inf)
     if not scheme.dynamic:
-        raise ValueError("[time] scheme = 'quasi-static' has no inertia: the vibration stages need "
-                         "'newmark' or 'generalised-alpha'")
+        raise ValueError(
+            "[time] scheme = 'quasi-static' has no inertia: the vibration stages need "
+            "'newmark' or 'generalised-alpha'"
+        )
     xi = accuracy(scheme, time.steps_per_period).damping_ratio
     limit = ALGORITHMIC_SHARE * damping.zeta
     if xi <= limit:
@@ -74,16 +78,21 @@ def check_time_scheme(time: TimeSettings, damping: DampingSettings) -> None:
     def damping_at(rho: float, n: int) -> float:
         return accuracy(GeneralisedAlpha.from_spectral_radius(rho), n).damping_ratio
 
-    rho = _smallest_passing(np.round(np.arange(0.0, 1.0001, 0.05), 2),
-                            lambda r: damping_at(r, time.steps_per_period) <= limit)
-    steps = _smallest_passing(range(time.steps_per_period, 257), lambda n: damping_at(time.rho_inf, n) <= limit)
+    rho = _smallest_passing(
+        np.round(np.arange(0.0, 1.0001, 0.05), 2),
+        lambda r: damping_at(r, time.steps_per_period) <= limit,
+    )
+    steps = _smallest_passing(
+        range(time.steps_per_period, 257), lambda n: damping_at(time.rho_inf, n) <= limit
+    )
     raise ValueError(
         f"[time] {time.scheme} (rho_inf = {time.rho_inf:g}) at {time.steps_per_period} steps per period "
         f"damps a resonance numerically by {100 * xi:.3g} % of critical, more than "
         f"{100 * ALGORITHMIC_SHARE:g} % of the smallest physical damping ratio of the vibration stages "
         f"([damping] zeta = {100 * damping.zeta:g} %): the time scheme, not the structure, would limit "
         f"the resonant response. Use rho_inf >= {rho} at this step, or steps_per_period >= {steps} "
-        "at this rho_inf (docs/dynamics.md)")
+        "at this rho_inf (docs/dynamics.md)"
+    )
 
 
 def stage_step(duration_s: float, frequency_hz: float, steps_per_period: int) -> float:
@@ -93,8 +102,12 @@ def stage_step(duration_s: float, frequency_hz: float, steps_per_period: int) ->
     return duration_s / (periods * steps_per_period)
 
 
-def compensate(excitations: Sequence[Excitation], durations_s: Sequence[float], scheme: Scheme,
-               steps_per_period: int) -> list[Excitation]:
+def compensate(
+    excitations: Sequence[Excitation],
+    durations_s: Sequence[float],
+    scheme: Scheme,
+    steps_per_period: int,
+) -> list[Excitation]:
     """The excitations with ``forcing_Hz`` set: for a stage at a natural frequency f_n (a mode
     number), the time-discrete natural frequency of that mode at the stage's step (the stage's
     step depends on its forcing frequency: fixed point, a few iterations); f elsewhere."""
@@ -113,9 +126,13 @@ def compensate(excitations: Sequence[Excitation], durations_s: Sequence[float], 
     return out
 
 
-def plan_vibration(schedule: Schedule, scheme: Scheme, steps_per_period: int,
-                   damping_ratio: Callable[[float], float], excitations: Sequence[Excitation]
-                   ) -> list[StagePlan]:
+def plan_vibration(
+    schedule: Schedule,
+    scheme: Scheme,
+    steps_per_period: int,
+    damping_ratio: Callable[[float], float],
+    excitations: Sequence[Excitation],
+) -> list[StagePlan]:
     """One plan per stage of ``schedule`` (stage k at ``excitations[k]``, if given), with the
     scheme's accuracy at the stage's largest frequency; ValueError if the algorithmic damping
     there exceeds ``ALGORITHMIC_SHARE`` of ``damping_ratio(f)`` (the physical ratio at f [Hz])."""
@@ -124,8 +141,15 @@ def plan_vibration(schedule: Schedule, scheme: Scheme, steps_per_period: int,
         f_max = max(stage.frequency(0.0), stage.frequency(stage.duration_s))
         dt = stage_step(stage.duration_s, f_max, steps_per_period)
         e = excitations[i] if i < len(excitations) else None
-        plan = StagePlan(f"vibration {i + 1}", float(start), float(start + stage.duration_s), dt,
-                         stage.frequency(0.0), stage.amplitude(0.0), e.reason if e else "")
+        plan = StagePlan(
+            f"vibration {i + 1}",
+            float(start),
+            float(start + stage.duration_s),
+            dt,
+            stage.frequency(0.0),
+            stage.amplitude(0.0),
+            e.reason if e else "",
+        )
         if f_max > 0:
             fidelity = accuracy(scheme, 1.0 / (f_max * dt))
             plan.steps_per_period = fidelity.steps_per_period
@@ -139,16 +163,22 @@ def plan_vibration(schedule: Schedule, scheme: Scheme, steps_per_period: int,
                     f"{100 * plan.algorithmic_damping:.3g} % of critical, more than "
                     f"{100 * ALGORITHMIC_SHARE:g} % of the physical damping ratio there "
                     f"({100 * plan.physical_damping:.3g} %); raise [time] rho_inf or steps_per_period"
-                    " (or, with modal damping, damping.n_modes)")
+                    " (or, with modal damping, damping.n_modes)"
+                )
         plans.append(plan)
     return plans
 
 
 def format_fidelity(plan: StagePlan) -> str:
     """One line: forcing and natural frequency, step, algorithmic damping and period error."""
-    natural = (f" = time-discrete natural frequency of the {plan.natural_frequency_Hz:.2f} Hz mode"
-               if plan.natural_frequency_Hz else " (not at a natural frequency)")
-    return (f"{plan.name}: {plan.frequency_Hz:.2f} Hz{natural}; dt {1e6 * plan.dt_s:.1f} us "
-            f"({plan.steps_per_period:.1f} steps per period), algorithmic damping "
-            f"{100 * max(plan.algorithmic_damping, 0.0):.4f} % (physical {100 * plan.physical_damping:.3g} %), "
-            f"period error {100 * plan.period_error:+.3f} %")
+    natural = (
+        f" = time-discrete natural frequency of the {plan.natural_frequency_Hz:.2f} Hz mode"
+        if plan.natural_frequency_Hz
+        else " (not at a natural frequency)"
+    )
+    return (
+        f"{plan.name}: {plan.frequency_Hz:.2f} Hz{natural}; dt {1e6 * plan.dt_s:.1f} us "
+        f"({plan.steps_per_period:.1f} steps per period), algorithmic damping "
+        f"{100 * max(plan.algorithmic_damping, 0.0):.4f} % (physical {100 * plan.physical_damping:.3g} %), "
+        f"period error {100 * plan.period_error:+.3f} %"
+    )

@@ -43,7 +43,12 @@ from solver.dynamics.time_loop import run
 from solver.installation import checkpoint
 from solver.installation.case import InstallationCase, case_differences
 from solver.installation.frequencies import Excitation, choose_frequencies, schedule_excitations
-from solver.installation.model import JointModel, attach_vibration, set_up_joint_model, settled_modes
+from solver.installation.model import (
+    JointModel,
+    attach_vibration,
+    set_up_joint_model,
+    settled_modes,
+)
 from solver.installation.observers import ContactZoneGuard
 from solver.installation.planning import StagePlan, compensate, format_fidelity, plan_vibration
 from solver.modal.eigen import ModalResult
@@ -172,7 +177,9 @@ class Installation:
         observers = [self._observer(index, plan, writer, bar)]
         mesh = self.case.mesh
         if mesh.contact_axial_size > 0:
-            observers.append(ContactZoneGuard(model.contact, mesh.contact_axial_size, mesh.contact_zone_above))
+            observers.append(
+                ContactZoneGuard(model.contact, mesh.contact_axial_size, mesh.contact_zone_above)
+            )
         wall0 = time.perf_counter()
         rows0 = len(self.history)
         for chunk in range(first_chunk, n_chunks):
@@ -221,8 +228,7 @@ class Installation:
         vib = self.case.vibration
         if self.case.schedule is None:
             stages = [
-                vib.stage(vib.stage_duration_s, e.drive_Hz, e.amplitude_N)
-                for e in self.excitations
+                vib.stage(vib.stage_duration_s, e.drive_Hz, e.amplitude_N) for e in self.excitations
             ]
         else:  # 'mode k' / 'ranked k' stages at the frequencies found by the modal stage
             stages = [
@@ -272,7 +278,11 @@ class Installation:
         self.excitations = compensate(self.excitations, self._stage_durations(), scheme, steps)
         if self.excitations:  # (none: the run ends after the modal stage)
             self.plans += plan_vibration(
-                self._schedule(model.problem.t), scheme, steps, model.damping.ratio, self.excitations
+                self._schedule(model.problem.t),
+                scheme,
+                steps,
+                model.damping.ratio,
+                self.excitations,
             )
         report.write_choice(self.excitations, self.output / "frequencies.csv", self.comm)
         self.on_stage("modal", time.perf_counter() - t0)
@@ -288,7 +298,9 @@ class Installation:
             amp = e.amplitude_N if isinstance(e.amplitude_N, str) else f"{e.amplitude_N:.0f} N"
             self.log(f"  {e.frequency_Hz:8.2f} Hz  {amp:>9}  {e.role:8} {e.reason}")
         if self.plans[1:]:
-            self.log("time discretisation of the vibration stages (docs/dynamics.md, resonance fidelity):")
+            self.log(
+                "time discretisation of the vibration stages (docs/dynamics.md, resonance fidelity):"
+            )
         for plan in self.plans[1:]:
             self.log("  " + format_fidelity(plan))
 
@@ -304,7 +316,9 @@ class Installation:
         """ValueError naming the keys in which this run's case differs from the checkpoint's
         (``InstallationCase.fingerprint``): a resumed run must compute what the killed one did."""
         if "case" not in manifest:
-            raise ValueError(f"checkpoint {self.checkpoint_dir} does not record its case: rerun without --resume")
+            raise ValueError(
+                f"checkpoint {self.checkpoint_dir} does not record its case: rerun without --resume"
+            )
         differences = case_differences(manifest["case"], self._fingerprint)
         if differences:
             raise ValueError(

@@ -39,7 +39,9 @@ class ContactSettings:
     lagged_friction: bool = False
     degree: int = 2  #: Lagrange degree of the displacement
     max_iterations: int = 30  #: Newton iterations per step before the step is cut
-    max_backtracks: int = 6  #: Newton line-search halvings (solver.dynamics.newton.ContactNewtonSolver)
+    max_backtracks: int = (
+        6  #: Newton line-search halvings (solver.dynamics.newton.ContactNewtonSolver)
+    )
     max_gap_change: float = 0.0  #: gap-limited Newton steps [m] (ContactNewtonSolver); 0: off
     #: sparse LU of the Newton corrections: "mumps" (faster), "superlu_dist" (bitwise repeatable on
     #: several ranks, where MUMPS's factors vary at round-off from run to run, which stick-slip

@@ -29,8 +29,14 @@ class CsvWriter:
     already known, written first (e.g. a resumed run's history). Parent folders are created.
     """
 
-    def __init__(self, path: str | Path, columns: Sequence[str] | None = None, comm=None,
-                 rows: Iterable = (), digits: int | None = 10):
+    def __init__(
+        self,
+        path: str | Path,
+        columns: Sequence[str] | None = None,
+        comm=None,
+        rows: Iterable = (),
+        digits: int | None = 10,
+    ):
         self.path = Path(path)
         self.columns = None if columns is None else list(columns)
         self.digits = digits
@@ -71,8 +77,9 @@ class CsvWriter:
         self.close()
 
 
-def write_csv(path: str | Path, columns: Sequence[str], rows: Iterable, comm=None,
-              digits: int | None = 10) -> None:
+def write_csv(
+    path: str | Path, columns: Sequence[str], rows: Iterable, comm=None, digits: int | None = 10
+) -> None:
     """The whole table at once (rank 0 of ``comm`` writes)."""
     with CsvWriter(path, columns, comm, rows, digits):
         pass

@@ -15,8 +15,9 @@ from solver.contact import NitscheContact
 __all__ = ["write_contact_points", "write_functions", "write_state"]
 
 
-def write_functions(path: str | Path, functions: Sequence[fem.Function], times: Sequence[float],
-                    name: str) -> Path:
+def write_functions(
+    path: str | Path, functions: Sequence[fem.Function], times: Sequence[float], name: str
+) -> Path:
     """The fields ``functions`` (of one space) as one VTX (.bp) series named ``name``, the k-th
     at "time" ``times[k]`` (e.g. mode shapes numbered 1, 2, ...)."""
     path = Path(path).with_suffix(".bp")

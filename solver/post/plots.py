@@ -12,7 +12,13 @@ from mpi4py import MPI
 
 from solver.contact import NitscheContact, Status
 
-__all__ = ["plot_contact_status", "plot_dismount", "plot_history", "plot_parameter_study", "plot_sweep"]
+__all__ = [
+    "plot_contact_status",
+    "plot_dismount",
+    "plot_history",
+    "plot_parameter_study",
+    "plot_sweep",
+]
 
 
 def plot_contact_status(contact: NitscheContact, joint, path: Path, title: str) -> None:
@@ -107,9 +113,13 @@ def plot_sweep(
     ax_f.plot(f, gain, "k.-", lw=0.6, ms=2, label="settlement")
     steps = [s for s in stages[1:] if s["steps"]]
     if steps and all(s["frequency_Hz"] > 0 for s in steps):
-        ax_f.bar([s["frequency_Hz"] for s in steps], [s["gained_mm"] for s in steps],
-                 width=0.4 * min(np.diff([s["frequency_Hz"] for s in steps]), default=10.0),
-                 alpha=0.3, label="gained per stage")
+        ax_f.bar(
+            [s["frequency_Hz"] for s in steps],
+            [s["gained_mm"] for s in steps],
+            width=0.4 * min(np.diff([s["frequency_Hz"] for s in steps]), default=10.0),
+            alpha=0.3,
+            label="gained per stage",
+        )
     lo, hi = f.min(), f.max()
     for k, fn in enumerate(x for x in natural_hz if lo <= x <= hi):
         label = "natural frequency" if k == 0 else None
@@ -122,8 +132,9 @@ def plot_sweep(
     plt.close(fig)
 
 
-def plot_dismount(history: list[dict[str, float]], table: list[dict[str, Any]], path: Path,
-         comm: MPI.Comm) -> None:
+def plot_dismount(
+    history: list[dict[str, float]], table: list[dict[str, Any]], path: Path, comm: MPI.Comm
+) -> None:
     """Settlement and axial force against time, dismount stages shaded (rank 0)."""
     if comm.rank != 0 or not history:
         return
@@ -134,21 +145,36 @@ def plot_dismount(history: list[dict[str, float]], table: list[dict[str, Any]], 
     fig, (ax, ax_f) = plt.subplots(2, 1, figsize=(9, 6), sharex=True)
     ax.plot(t, [r["settlement_mm"] for r in history], "k-", lw=1)
     ax.set_ylabel("settlement [mm] (down +)")
-    ax_f.plot(t, [1e-3 * r["axial_force_N"] for r in history], "tab:blue", lw=1,
-              label="axial force on the TP top (up +)")
-    ax_f.plot(t, [1e-3 * r["normal_force_N"] for r in history], "tab:red", lw=1,
-              label="contact normal force")
+    ax_f.plot(
+        t,
+        [1e-3 * r["axial_force_N"] for r in history],
+        "tab:blue",
+        lw=1,
+        label="axial force on the TP top (up +)",
+    )
+    ax_f.plot(
+        t,
+        [1e-3 * r["normal_force_N"] for r in history],
+        "tab:red",
+        lw=1,
+        label="contact normal force",
+    )
     ax_f.set_xlabel("time [s]")
     ax_f.set_ylabel("force [kN]")
     ax_f.legend(loc="best", fontsize=8)
-    colours = {"install": "tab:green", "pull ramp": "tab:orange", "pull alone": "gold",
-               "pull + vibration": "tab:purple"}
+    colours = {
+        "install": "tab:green",
+        "pull ramp": "tab:orange",
+        "pull alone": "gold",
+        "pull + vibration": "tab:purple",
+    }
     seen = set()
     for row in table:
         for a in (ax, ax_f):
             label = row["role"] if a is ax and row["role"] not in seen else None
-            a.axvspan(row["start_s"], row["end_s"], color=colours[row["role"]], alpha=0.15,
-                      label=label)
+            a.axvspan(
+                row["start_s"], row["end_s"], color=colours[row["role"]], alpha=0.15, label=label
+            )
         seen.add(row["role"])
     if table:  # the dismount stages and the end of the installation before them
         t0, t1 = table[0]["start_s"], table[-1]["end_s"]
@@ -172,15 +198,29 @@ def plot_parameter_study(rows: list[dict[str, Any]], path: Path, comm: MPI.Comm)
     fig, ax = plt.subplots(figsize=(max(6, 1.8 * len(names)), 4.5))
     x = np.arange(len(names))
     for k in range(n_stages):
-        gain = [next((r["gained_mm"] for r in rows if r["variant"] == n and r["stage"] == k),
-                     np.nan) for n in names]
-        label = next((f"{r['role'] or r['name']}" + (f" ({r['frequency_Hz']:.0f} Hz)"
-                                                      if r["frequency_Hz"] else "")
-                      for r in rows if r["stage"] == k and r["variant"] == names[0]), f"stage {k}")
+        gain = [
+            next((r["gained_mm"] for r in rows if r["variant"] == n and r["stage"] == k), np.nan)
+            for n in names
+        ]
+        label = next(
+            (
+                f"{r['role'] or r['name']}"
+                + (f" ({r['frequency_Hz']:.0f} Hz)" if r["frequency_Hz"] else "")
+                for r in rows
+                if r["stage"] == k and r["variant"] == names[0]
+            ),
+            f"stage {k}",
+        )
         ax.bar(x + (k - 0.5 * (n_stages - 1)) * width, gain, width, label=label)
-    labels = [next(f"{r['variant']}\n{textwrap.fill(r['value'], 20)}"
-                   + ("" if r["status"] == "done" else f"\n[{r['status']}]")
-                   for r in rows if r["variant"] == n) for n in names]
+    labels = [
+        next(
+            f"{r['variant']}\n{textwrap.fill(r['value'], 20)}"
+            + ("" if r["status"] == "done" else f"\n[{r['status']}]")
+            for r in rows
+            if r["variant"] == n
+        )
+        for n in names
+    ]
     ax.set_xticks(x, labels, fontsize=7)
     ax.set_ylabel("settlement gained in the stage [mm]")
     ax.set_title("one-at-a-time parameter study (legend: stages of the base case)")

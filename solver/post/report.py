@@ -178,10 +178,14 @@ def format_stage(s: dict) -> str:
         f"Newton {s['newton_iterations_mean']:.2f}/step, {s.get('step_cuts', 0)} step cut(s)"
     )
     if s.get("steps_per_period"):
-        natural = f", mode {s['natural_frequency_Hz']:.2f} Hz" if s.get("natural_frequency_Hz") else ""
-        line += (f"\n{'':>14}{s['steps_per_period']:.1f} steps/period{natural}: algorithmic damping "
-                 f"{100 * max(s['algorithmic_damping'], 0.0):.4f} % (physical {100 * s['physical_damping']:.3g} %), "
-                 f"period error {100 * s['period_error']:+.3f} %")
+        natural = (
+            f", mode {s['natural_frequency_Hz']:.2f} Hz" if s.get("natural_frequency_Hz") else ""
+        )
+        line += (
+            f"\n{'':>14}{s['steps_per_period']:.1f} steps/period{natural}: algorithmic damping "
+            f"{100 * max(s['algorithmic_damping'], 0.0):.4f} % (physical {100 * s['physical_damping']:.3g} %), "
+            f"period error {100 * s['period_error']:+.3f} %"
+        )
     return line
 
 
@@ -206,7 +210,11 @@ def format_stabilisation(stages: list[dict]) -> list[str]:
             groups["no settlement"].append(f)
         else:
             share = f"{f} ({100 * s['gained_last_20pct_mm'] / s['gained_mm']:.1f} %)"
-            key = "stabilised" if stabilised(s["gained_mm"], s["gained_last_20pct_mm"]) else "still settling"
+            key = (
+                "stabilised"
+                if stabilised(s["gained_mm"], s["gained_last_20pct_mm"])
+                else "still settling"
+            )
             groups[key].append(share)
     if not any(groups.values()):
         return []
@@ -248,13 +256,26 @@ def frequency_selectivity(stages: list[dict], excitations) -> list[dict[str, flo
     rows = []
     for s in stages:
         e = roles.get(s["stage"])
-        if e is None or e.role != "modal" or not s["steps"] or e.amplitude_N != roles[control["stage"]].amplitude_N:
+        if (
+            e is None
+            or e.role != "modal"
+            or not s["steps"]
+            or e.amplitude_N != roles[control["stage"]].amplitude_N
+        ):
             continue
         r, r_stage = rates(s)
-        rows.append({"frequency_Hz": s["frequency_Hz"], "rate_mm_s": r, "stage_rate_mm_s": r_stage,
-                     "control_Hz": control["frequency_Hz"], "control_rate_mm_s": c,
-                     "control_stage_rate_mm_s": c_stage, "ratio": ratio(r, c),
-                     "stage_ratio": ratio(r_stage, c_stage)})
+        rows.append(
+            {
+                "frequency_Hz": s["frequency_Hz"],
+                "rate_mm_s": r,
+                "stage_rate_mm_s": r_stage,
+                "control_Hz": control["frequency_Hz"],
+                "control_rate_mm_s": c,
+                "control_stage_rate_mm_s": c_stage,
+                "ratio": ratio(r, c),
+                "stage_ratio": ratio(r_stage, c_stage),
+            }
+        )
     return rows
 
 
@@ -269,9 +290,11 @@ def format_selectivity(rows: list[dict[str, float]]) -> list[str]:
         "this run",
         f"  control {rows[0]['control_Hz']:8.2f} Hz: {rows[0]['control_rate_mm_s']:+.4f} mm/s "
         f"(whole stage {rows[0]['control_stage_rate_mm_s']:+.4f} mm/s)",
-        *(f"  modal   {r['frequency_Hz']:8.2f} Hz: {r['rate_mm_s']:+.4f} mm/s = {r['ratio']:.2f} x the "
-          f"control (whole stage {r['stage_rate_mm_s']:+.4f} mm/s = {r['stage_ratio']:.2f} x)"
-          for r in rows),
+        *(
+            f"  modal   {r['frequency_Hz']:8.2f} Hz: {r['rate_mm_s']:+.4f} mm/s = {r['ratio']:.2f} x the "
+            f"control (whole stage {r['stage_rate_mm_s']:+.4f} mm/s = {r['stage_ratio']:.2f} x)"
+            for r in rows
+        ),
     ]
 
 

@@ -36,14 +36,26 @@ def _write(folder, name: str, text: str):
 
 
 def test_extends_merges_tables_and_the_child_wins(tmp_path):
-    _write(tmp_path, "parent", 'extends = "scaled"\n[mesh]\nn_circumferential = 16\n'
-           '[vibration]\nlead_in_hz = [1.0, 2.0]\n[[schedule]]\nduration_s = 1.0\nfrequency_hz = 5.0\n')
-    child = _write(tmp_path, "child", 'extends = "parent"\n[mesh]\naxial_size = 0.5\n'
-                   '[vibration]\nlead_in_hz = [3.0]\n')
+    _write(
+        tmp_path,
+        "parent",
+        'extends = "scaled"\n[mesh]\nn_circumferential = 16\n'
+        "[vibration]\nlead_in_hz = [1.0, 2.0]\n[[schedule]]\nduration_s = 1.0\nfrequency_hz = 5.0\n",
+    )
+    child = _write(
+        tmp_path,
+        "child",
+        'extends = "parent"\n[mesh]\naxial_size = 0.5\n[vibration]\nlead_in_hz = [3.0]\n',
+    )
     case = read_case(child, ["mesh.n_layers=2"])
     scaled = read_case("scaled")
     assert "extends" not in case and case["_source"] == str(child)
-    assert case["mesh"] == {**scaled["mesh"], "n_circumferential": 16, "axial_size": 0.5, "n_layers": 2}
+    assert case["mesh"] == {
+        **scaled["mesh"],
+        "n_circumferential": 16,
+        "axial_size": 0.5,
+        "n_layers": 2,
+    }
     assert case["vibration"]["lead_in_hz"] == [3.0]  # arrays are replaced whole
     assert case["vibration"]["n_modes"] == scaled["vibration"]["n_modes"]
     assert case["schedule"] == [{"duration_s": 1.0, "frequency_hz": 5.0}]
@@ -69,6 +81,6 @@ def test_extends_errors(tmp_path):
     itself = _write(tmp_path, "self", 'extends = "self"\n')
     with pytest.raises(ValueError, match="cycle"):
         read_case(itself)
-    wrong = _write(tmp_path, "wrong", 'extends = 3\n')
+    wrong = _write(tmp_path, "wrong", "extends = 3\n")
     with pytest.raises(ValueError, match="extends must name a case"):
         read_case(wrong)

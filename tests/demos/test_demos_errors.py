@@ -7,8 +7,16 @@ from mpi4py import MPI
 
 pytestmark = pytest.mark.mpi
 
-DEMOS = ("install", "sweep", "dismount", "imperfections", "parameter_study", "joint_geometry", "modal",
-         "lumped")
+DEMOS = (
+    "install",
+    "sweep",
+    "dismount",
+    "imperfections",
+    "parameter_study",
+    "joint_geometry",
+    "modal",
+    "lumped",
+)
 WITHOUT_PROGRESS_BAR = ("joint_geometry", "modal", "lumped")
 
 

@@ -31,7 +31,11 @@ PIPELINE = ["time.steps_per_period=8", "output.checkpoint_every=50", "output.par
 
 def test_imperfection_reaches_the_mesh(tiny_case):
     amplitude, phase = 0.4e-3, 30.0
-    case = tiny_case(*PIPELINE, f"imperfections.tp.amplitude_m={amplitude}", f"imperfections.tp.phase_deg={phase}")
+    case = tiny_case(
+        *PIPELINE,
+        f"imperfections.tp.amplitude_m={amplitude}",
+        f"imperfections.tp.phase_deg={phase}",
+    )
     model = set_up_joint_model(MPI.COMM_WORLD, case)
     joint, tp_z = case.joint, model.placed.tp_offset
     shift = tp_z - joint.tp_offset
@@ -68,11 +72,16 @@ def test_dismount_pull_lifts_the_frictionless_tp(shared_tmp):
     assert static(runner.history[-1]["time_s"]) == pytest.approx(20e3)
     table = dismount_table(runner.history, runner.stages, plan.roles(), static)
     s = [r["settlement_mm"] for r in runner.history]
-    print("\n" + "\n".join(
-        f"{r['role']}: motion {r['axial_motion_mm']:+.4f} mm, normal force "
-        f"{r['normal_force_end_N']:.1f} N, separated {r['separated']}" for r in table)
+    print(
+        "\n"
+        + "\n".join(
+            f"{r['role']}: motion {r['axial_motion_mm']:+.4f} mm, normal force "
+            f"{r['normal_force_end_N']:.1f} N, separated {r['separated']}"
+            for r in table
+        )
         + f"\nself-weight settlement {runner.stages[0]['settlement_end_mm']:.4f} mm, "
-        f"final {s[-1]:.4f} mm")
+        f"final {s[-1]:.4f} mm"
+    )
     assert runner.stages[0]["settlement_end_mm"] > 0  # installed first
     assert [r["role"] for r in table] == ["pull ramp", "pull alone"]
     hold = table[-1]

@@ -65,19 +65,27 @@ def test_static_force_history_continues_the_self_weight():
 @pytest.mark.parametrize(
     "overrides, words",
     [
-        (["static_force.times_s=[0.1, 0.05]", "static_force.forces_N=[1e3, 2e3]"],
-         ["[static_force]", "strictly increasing"]),
-        (["static_force.times_s=[0.1]", "static_force.forces_N=[1e3, 2e3]"],
-         ["[static_force]", "same length"]),
+        (
+            ["static_force.times_s=[0.1, 0.05]", "static_force.forces_N=[1e3, 2e3]"],
+            ["[static_force]", "strictly increasing"],
+        ),
+        (
+            ["static_force.times_s=[0.1]", "static_force.forces_N=[1e3, 2e3]"],
+            ["[static_force]", "same length"],
+        ),
         (["static_force.times_s=[0.0]", "static_force.forces_N=[1e3]"], ["positive"]),
-        (["imperfections.tp.amplitude_m=1e-3", "imperfections.tp.file='x.csv'"],
-         ["[imperfections.tp]", "not both"]),
+        (
+            ["imperfections.tp.amplitude_m=1e-3", "imperfections.tp.file='x.csv'"],
+            ["[imperfections.tp]", "not both"],
+        ),
         (["imperfections.tp.file='no_such_scan.csv'"], ["[imperfections.tp]", "no such file"]),
         (["imperfections.hub.amplitude_m=1e-3"], ["[imperfections]"]),
         (["imperfections.tp.amplitude_m=1e-3", "imperfections.tp.waves=0"], ["waves"]),
         (["vibration.modal_stage=false"], ["modal_stage", "[[schedule]]"]),
-        (["schedule=[{duration_s = 0.1, frequency_hz = 'ranked 5'}]"],
-         ["ranked 5", "n_frequencies"]),
+        (
+            ["schedule=[{duration_s = 0.1, frequency_hz = 'ranked 5'}]"],
+            ["ranked 5", "n_frequencies"],
+        ),
         (["schedule=[{duration_s = 0.1, frequency_hz = 'ranked 0'}]"], ["ranked k"]),
     ],
 )
@@ -148,8 +156,9 @@ def test_imperfection_setting_gives_the_deviation_and_placement(shared_tmp):
     if comm.rank == 0:
         rows = ["z_m,angle_deg,radial_deviation_m"]
         for z in (0.0, 1.4):
-            rows += [f"{z},{a},{0.3e-3 * math.cos(math.radians(2 * a)):.9e}"
-                     for a in range(0, 360, 5)]
+            rows += [
+                f"{z},{a},{0.3e-3 * math.cos(math.radians(2 * a)):.9e}" for a in range(0, 360, 5)
+            ]
         with open(path, "w") as f:
             f.write("\n".join(rows) + "\n")
     comm.barrier()
@@ -167,15 +176,24 @@ def test_imperfection_setting_gives_the_deviation_and_placement(shared_tmp):
 def test_dismount_case_sequence():
     from solver.installation.dismount import DismountPlan, dismount_case
 
-    plan = DismountPlan(pull_N=30e3, ramp_s=0.05, hold_s=0.1, n_install=2, n_frequencies=3,
-                        stage_duration_s=0.1, amplitude_N=3600.0)
+    plan = DismountPlan(
+        pull_N=30e3,
+        ramp_s=0.05,
+        hold_s=0.1,
+        n_install=2,
+        n_frequencies=3,
+        stage_duration_s=0.1,
+        amplitude_N=3600.0,
+    )
     data = read_case("scaled", ["self_weight.ramp_time_s=2.0", "self_weight.hold_s=0.1"])
     dismount_case(data, plan)
     case = InstallationCase.from_dict(data)
     frequencies = [s.frequency_hz for s in case.schedule.stages]
     assert frequencies == ["ranked 1", "ranked 2", 0.0, 0.0, "ranked 1", "ranked 2", "ranked 3"]
     assert plan.roles() == ["install"] * 2 + ["pull ramp", "pull alone"] + ["pull + vibration"] * 3
-    assert case.vibration.n_frequencies == max(3, read_case("scaled")["vibration"]["n_frequencies"])  # raised, never lowered
+    assert case.vibration.n_frequencies == max(
+        3, read_case("scaled")["vibration"]["n_frequencies"]
+    )  # raised, never lowered
     force = case.static_force.history(case.self_weight)
     t_sw = 2.1
     # self-weight held through the two installation stages, then ramped to the pull over 0.05 s
@@ -194,18 +212,34 @@ def test_dismount_table_motion_and_separation():
     from solver.installation.dismount import dismount_table
 
     def row(stage, t, s, normal, contact):
-        return {"stage": stage, "time_s": t, "settlement_mm": s, "normal_force_N": normal,
-                "amplitude_N": 0.0, "axial_force_N": 0.0, "stick_fraction": contact,
-                "slip_fraction": 0.0}
+        return {
+            "stage": stage,
+            "time_s": t,
+            "settlement_mm": s,
+            "normal_force_N": normal,
+            "amplitude_N": 0.0,
+            "axial_force_N": 0.0,
+            "stick_fraction": contact,
+            "slip_fraction": 0.0,
+        }
 
     history = [row(0, 1.0, 5.0, 4e4, 0.2), row(1, 1.1, 4.5, 3e4, 0.1), row(2, 1.2, 1.5, 0.0, 0.0)]
 
     def stage(k, s0, s1, t0, t1):
-        return {"stage": k, "start_s": t0, "end_s": t1, "frequency_Hz": 0.0,
-                "settlement_start_mm": s0, "settlement_end_mm": s1}
+        return {
+            "stage": k,
+            "start_s": t0,
+            "end_s": t1,
+            "frequency_Hz": 0.0,
+            "settlement_start_mm": s0,
+            "settlement_end_mm": s1,
+        }
 
-    stages = [stage(0, 0.0, 5.0, 0.0, 1.0), stage(1, 5.0, 4.5, 1.0, 1.1),
-              stage(2, 4.5, 1.5, 1.1, 1.2)]
+    stages = [
+        stage(0, 0.0, 5.0, 0.0, 1.0),
+        stage(1, 5.0, 4.5, 1.0, 1.1),
+        stage(2, 4.5, 1.5, 1.1, 1.2),
+    ]
     table = dismount_table(history, stages, ["pull ramp", "pull alone"], lambda t: 2e4)
     assert [r["axial_motion_mm"] for r in table] == pytest.approx([0.5, 3.0])
     assert [r["separated"] for r in table] == [False, True]
@@ -227,8 +261,12 @@ def test_parameter_study_varies_one_thing_at_a_time():
             if getattr(case, name) != getattr(base, name)
         }
         changed[v.parameter] = diff
-    assert changed == {"friction": {"friction"}, "d_c": {"friction"}, "damping": {"damping"},
-                       "mesh size": {"mesh"}}
+    assert changed == {
+        "friction": {"friction"},
+        "d_c": {"friction"},
+        "damping": {"damping"},
+        "mesh size": {"mesh"},
+    }
     low = _case(*study[1].overrides).friction
     assert (low.mu_s, low.mu_d) == (0.0625, 0.05)
     assert _case(*study[2].overrides).friction.d_c == 1.0
@@ -242,5 +280,9 @@ def test_quick_preset_is_the_tiny_mesh_with_the_coarse_contact(quick_case, coars
     """cases/quick.toml extends cases/coarse.toml: the landing contact settings on 12 x 0.2 m."""
     quick, coarse = quick_case(), coarse_case()
     assert quick.contact == coarse.contact and quick.friction == coarse.friction
-    assert (quick.mesh.n_circumferential, quick.mesh.axial_size, quick.mesh.contact_axial_size) == (12, 0.2, 0.0)
+    assert (quick.mesh.n_circumferential, quick.mesh.axial_size, quick.mesh.contact_axial_size) == (
+        12,
+        0.2,
+        0.0,
+    )
     assert quick.self_weight.ramp_time_s == 0.012 and not quick.output.paraview

@@ -23,7 +23,10 @@ def closed_form_fraction(joint: JointGeometry, overlap: np.ndarray) -> np.ndarra
     ta, tb = math.tan(joint.mp.half_angle), math.tan(joint.tp.half_angle)
     length, r0 = joint.tp.cone_length, float(joint.tp.inner_radius(0.0))
     zeta = np.clip((overlap - joint.overlap) * ta / (ta - tb), 0.0, np.minimum(overlap, length))
-    area = lambda s: r0 * s - 0.5 * tb * s**2  # integral of r(zeta) d zeta, per radian
+
+    def area(s):  # integral of r(zeta) d zeta, per radian
+        return r0 * s - 0.5 * tb * s**2
+
     return area(zeta) / area(length)
 
 

@@ -219,7 +219,9 @@ def test_nodes_on_exact_circles(n_layers):
     """Every geometry node of a perfect tube (also inside the wall) lies on one of the
     exact radii of the layer interfaces or their midpoints (hex27: no chord nodes)."""
     part = ConePart(0.0, 0.600, 0.4, 0.0, 0.006)
-    md = create_tube_mesh(COMM, part, MeshOptions(n_circumferential=24, axial_size=0.1, n_layers=n_layers))
+    md = create_tube_mesh(
+        COMM, part, MeshOptions(n_circumferential=24, axial_size=0.1, n_layers=n_layers)
+    )
     r = np.hypot(*md.mesh.geometry.x[:, :2].T)
     exact = 0.294 + 0.006 * np.arange(2 * n_layers + 1) / (2 * n_layers)
     distance = np.abs(r[:, None] - exact[None, :]).min(axis=1)
@@ -283,8 +285,12 @@ def test_contact_zone_refinement(scaled):
         return math.pi * (r1 + r2) * math.hypot(length, r2 - r1)
 
     mp, tp = scaled.mp, scaled.tp
-    areas = {tags.MP_CONTACT: frustum(mp.outer_radius(z_edge - below), mp.outer_radius(z_edge + above), below + above),
-             tags.TP_CONTACT: frustum(tp.inner_radius(0.0), tp.inner_radius(above), above)}
+    areas = {
+        tags.MP_CONTACT: frustum(
+            mp.outer_radius(z_edge - below), mp.outer_radius(z_edge + above), below + above
+        ),
+        tags.TP_CONTACT: frustum(tp.inner_radius(0.0), tp.inner_radius(above), above),
+    }
     for tag, area in areas.items():
         assert integrate(md, "ds", tag) == pytest.approx(area, rel=1e-3)
     mesh = md.mesh
@@ -292,7 +298,9 @@ def test_contact_zone_refinement(scaled):
     def extents(dim: int, entities):
         """Axial height and mid-height of owned entities [m] (their corner nodes)."""
         entities = entities[entities < mesh.topology.index_map(dim).size_local]
-        z = mesh.geometry.x[dolfinx.mesh.entities_to_geometry(mesh, dim, entities)[:, : 2**dim]][:, :, 2]
+        z = mesh.geometry.x[dolfinx.mesh.entities_to_geometry(mesh, dim, entities)[:, : 2**dim]][
+            :, :, 2
+        ]
         return z.max(axis=1) - z.min(axis=1), 0.5 * (z.max(axis=1) + z.min(axis=1))
 
     for tag, low in ((tags.MP_CONTACT, z_edge - below), (tags.TP_CONTACT, z_edge)):
@@ -318,15 +326,29 @@ def test_partition(scaled, partition):
     "sectors", each rank owns the cells of its angular sector (centres within
     [2 pi r / p - pi, 2 pi (r + 1) / p - pi]), so every rank holds a share of both contact
     surfaces of 1/p of the whole (+-1 layer of elements); serially nothing changes."""
-    options = MeshOptions(n_circumferential=8, axial_size=0.25, contact_axial_size=0.02, partition=partition)
+    options = MeshOptions(
+        n_circumferential=8, axial_size=0.25, contact_axial_size=0.02, partition=partition
+    )
     md = create_joint_mesh(COMM, scaled, options)
     expected = structured_counts(scaled, MeshOptions(n_circumferential=8, axial_size=0.25))
     assert owned_count(md, 3, tags.TP_VOLUME) + owned_count(md, 3, tags.MP_VOLUME) > 0
-    reference = create_joint_mesh(COMM, scaled, MeshOptions(n_circumferential=8, axial_size=0.25,
-                                                            contact_axial_size=0.02, partition="graph"))
-    for dim, tag in ((3, tags.TP_VOLUME), (3, tags.MP_VOLUME), (2, tags.TP_CONTACT), (2, tags.MP_CONTACT)):
+    reference = create_joint_mesh(
+        COMM,
+        scaled,
+        MeshOptions(
+            n_circumferential=8, axial_size=0.25, contact_axial_size=0.02, partition="graph"
+        ),
+    )
+    for dim, tag in (
+        (3, tags.TP_VOLUME),
+        (3, tags.MP_VOLUME),
+        (2, tags.TP_CONTACT),
+        (2, tags.MP_CONTACT),
+    ):
         assert owned_count(md, dim, tag) == owned_count(reference, dim, tag)
-    assert integrate(md, "dx", tags.TP_VOLUME) == pytest.approx(integrate(reference, "dx", tags.TP_VOLUME), rel=1e-12)
+    assert integrate(md, "dx", tags.TP_VOLUME) == pytest.approx(
+        integrate(reference, "dx", tags.TP_VOLUME), rel=1e-12
+    )
     assert owned_count(md, 2, tags.MP_CLAMPED) == expected[tags.MP_CLAMPED]
     if partition != "sectors":
         return

@@ -21,8 +21,13 @@ def scaled() -> JointGeometry:
 def test_volume_and_areas_against_quadrature(scaled, name):
     """Closed-form volume and cone areas equal numerical integration of the profile."""
     part: ConePart = getattr(scaled, name)
-    ro = lambda z: float(part.outer_radius(z))
-    ri = lambda z: float(part.inner_radius(z))
+
+    def ro(z):
+        return float(part.outer_radius(z))
+
+    def ri(z):
+        return float(part.inner_radius(z))
+
     pts = part.profile_heights()
     volume = sum(
         quad(lambda z: math.pi * (ro(z) ** 2 - ri(z) ** 2), a, b)[0]
@@ -115,7 +120,7 @@ def test_case_file_errors(tmp_path):
 
 def test_ignores_other_sections(tmp_path):
     path = tmp_path / "case.toml"
-    path.write_text((CASES / "scaled.toml").read_text() + "\n[post_processing]\nformat = \"vtx\"\n")
+    path.write_text((CASES / "scaled.toml").read_text() + '\n[post_processing]\nformat = "vtx"\n')
     joint, material, options = load_geometry(path)
     assert material == Material(E=210e9, nu=0.3, rho=7850.0)
     assert options == MeshOptions(contact_axial_size=0.01, contact_zone_above=0.08)

@@ -131,7 +131,9 @@ def test_dockerfile_default_command_runs_an_existing_demo():
     assert words[:3] == ["mpirun", "-n", "2"]
     assert (ROOT / words[4]).is_file(), f"CMD runs {words[4]}, which does not exist"
     for variable in ("OMPI_ALLOW_RUN_AS_ROOT=1", "OMPI_ALLOW_RUN_AS_ROOT_CONFIRM=1"):
-        assert re.search(rf"^ENV {variable}$", text, re.MULTILINE), f"Dockerfile lacks ENV {variable}"
+        assert re.search(rf"^ENV {variable}$", text, re.MULTILINE), (
+            f"Dockerfile lacks ENV {variable}"
+        )
 
 
 def test_the_project_is_installed_the_same_way_everywhere():
@@ -139,7 +141,9 @@ def test_the_project_is_installed_the_same_way_everywhere():
     editable without dependencies."""
     for path in ("docker/Dockerfile", "docker/check_debootstrap.sh", "scripts/setup_env.sh"):
         text = (ROOT / path).read_text()
-        assert re.search(r"pip install [^\n]*--no-deps[^\n]*-e \.", text), f"{path} does not install the project"
+        assert re.search(r"pip install [^\n]*--no-deps[^\n]*-e \.", text), (
+            f"{path} does not install the project"
+        )
 
 
 def test_the_installed_packages_are_every_package_folder():
@@ -149,12 +153,22 @@ def test_the_installed_packages_are_every_package_folder():
 
     config = tomllib.loads((ROOT / "pyproject.toml").read_text())
     include = config["tool"]["setuptools"]["packages"]["find"]["include"]
-    folders = {path.parent.relative_to(ROOT).as_posix().replace("/", ".")
-               for path in ROOT.glob("*/**/__init__.py") if ".venv" not in path.parts}
-    missing = [name for name in folders if not any(fnmatch.fnmatchcase(name, pattern) for pattern in include)]
+    folders = {
+        path.parent.relative_to(ROOT).as_posix().replace("/", ".")
+        for path in ROOT.glob("*/**/__init__.py")
+        if ".venv" not in path.parts
+    }
+    missing = [
+        name
+        for name in folders
+        if not any(fnmatch.fnmatchcase(name, pattern) for pattern in include)
+    ]
     assert not missing, f"packages not installed by pyproject.toml: {missing}"
-    editing = [str(path.relative_to(ROOT)) for path in python_files()
-               if path.name != "test_docker_recipe.py" and "sys.path" in path.read_text()]
+    editing = [
+        str(path.relative_to(ROOT))
+        for path in python_files()
+        if path.name != "test_docker_recipe.py" and "sys.path" in path.read_text()
+    ]
     assert not editing, f"sys.path edited in {editing}"
 
 
@@ -162,6 +176,10 @@ def test_no_script_hides_a_package():
     """A script's folder comes first on sys.path, so a demo or benchmark named like one of the
     project's packages would hide it."""
     packages = {path.parent.name for path in ROOT.glob("*/__init__.py")}
-    clashes = [str(path.relative_to(ROOT)) for d in ("demos", "benchmarks")
-               for path in (ROOT / d).glob("*.py") if path.stem in packages]
+    clashes = [
+        str(path.relative_to(ROOT))
+        for d in ("demos", "benchmarks")
+        for path in (ROOT / d).glob("*.py")
+        if path.stem in packages
+    ]
     assert not clashes, f"scripts named like a package: {clashes}"

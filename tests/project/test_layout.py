@@ -54,15 +54,19 @@ def modules() -> list[Path]:
 def test_no_module_imports_a_higher_layer(path):
     own = package_of(".".join(path.relative_to(ROOT).with_suffix("").parts))
     wrong = sorted(
-        name for name in imports(path)
-        if (other := package_of(name)) is not None and other != own
-        and LAYERS[other] >= LAYERS[own]
+        name
+        for name in imports(path)
+        if (other := package_of(name)) is not None and other != own and LAYERS[other] >= LAYERS[own]
     )
     assert not wrong, f"{path.relative_to(ROOT)} ({own}) imports higher or sibling layers: {wrong}"
 
 
 def test_no_module_is_longer_than_about_500_lines():
-    long = {str(p.relative_to(ROOT)): n for p in modules() if (n := len(p.read_text().splitlines())) > 520}
+    long = {
+        str(p.relative_to(ROOT)): n
+        for p in modules()
+        if (n := len(p.read_text().splitlines())) > 520
+    }
     assert not long, f"modules over 500 lines: {long}"
 
 

@@ -17,7 +17,9 @@ MASTER, SLAVE = 13, 14
 LOWER, UPPER = 1, 2
 
 
-def _to_mesh(comm: MPI.Comm, build) -> tuple[dolfinx.mesh.Mesh, dolfinx.mesh.MeshTags, dolfinx.mesh.MeshTags]:
+def _to_mesh(
+    comm: MPI.Comm, build
+) -> tuple[dolfinx.mesh.Mesh, dolfinx.mesh.MeshTags, dolfinx.mesh.MeshTags]:
     """Run ``build`` (which fills the gmsh model) on rank 0 and distribute the mesh."""
     if comm.rank == 0:
         gmsh.initialize(interruptible=False)
@@ -74,12 +76,24 @@ def two_blocks(
     return _to_mesh(comm, build)
 
 
-def _ring_sector(r0: float, r1: float, thickness: float, n_r: int, n_theta: int) -> tuple[int, int, int]:
+def _ring_sector(
+    r0: float, r1: float, thickness: float, n_r: int, n_theta: int
+) -> tuple[int, int, int]:
     """Quarter annulus r0 < r < r1, 0 < theta < pi/2, 0 < z < thickness; (inner, outer surface, volume)."""
     occ = gmsh.model.occ
     c = occ.addPoint(0, 0, 0)
-    p = [occ.addPoint(r0, 0, 0), occ.addPoint(r1, 0, 0), occ.addPoint(0, r1, 0), occ.addPoint(0, r0, 0)]
-    lines = [occ.addLine(p[0], p[1]), occ.addCircleArc(p[1], c, p[2]), occ.addLine(p[2], p[3]), occ.addCircleArc(p[3], c, p[0])]
+    p = [
+        occ.addPoint(r0, 0, 0),
+        occ.addPoint(r1, 0, 0),
+        occ.addPoint(0, r1, 0),
+        occ.addPoint(0, r0, 0),
+    ]
+    lines = [
+        occ.addLine(p[0], p[1]),
+        occ.addCircleArc(p[1], c, p[2]),
+        occ.addLine(p[2], p[3]),
+        occ.addCircleArc(p[3], c, p[0]),
+    ]
     surf = occ.addPlaneSurface([occ.addCurveLoop(lines)])
     out = occ.extrude([(2, surf)], 0, 0, thickness, numElements=[1], recombine=True)
     occ.remove([(0, c)])
@@ -202,7 +216,9 @@ def sliding_block(
     from solver.dynamics.newton import ContactNewtonSolver
 
     H, q = 0.25, 1e6
-    mesh, cell_tags, tags = two_blocks(comm, heights=(H, H), lower=(4, 4, 2), upper=(3, 3, 2), inset=0.25)
+    mesh, cell_tags, tags = two_blocks(
+        comm, heights=(H, H), lower=(4, 4, 2), upper=(3, 3, 2), inset=0.25
+    )
     V = dolfinx.fem.functionspace(mesh, ("Lagrange", 1, (3,)))
     material = Material(E=1e9, nu=0.3)
     top = dolfinx.mesh.locate_entities_boundary(mesh, 2, lambda x: np.isclose(x[2], H))
@@ -210,20 +226,27 @@ def sliding_block(
     drag = dolfinx.fem.Constant(mesh, 0.0)
     top_x = dolfinx.fem.locate_dofs_topological(V.sub(0), 2, top)
     bcs = [fixed(V, c, lambda x: np.isclose(x[2], -H)) for c in range(3)]
-    bcs += [fixed(V, 1, lambda x: np.isclose(x[2], H)), dolfinx.fem.dirichletbc(drag, top_x, V.sub(0))]
+    bcs += [
+        fixed(V, 1, lambda x: np.isclose(x[2], H)),
+        dolfinx.fem.dirichletbc(drag, top_x, V.sub(0)),
+    ]
     if rigid_base:
         base = dolfinx.fem.locate_dofs_topological(V, 3, cell_tags.find(LOWER))
         bcs.append(dolfinx.fem.dirichletbc(np.zeros(3), base, V))
     u_, v_ = ufl.TrialFunction(V), ufl.TestFunction(V)
     a = dolfinx.fem.form(ufl.inner(sigma(u_, material), epsilon(v_)) * ufl.dx)
     load = dolfinx.fem.Constant(mesh, np.array([0.0, 0.0, -q]))
-    L = dolfinx.fem.form(ufl.inner(load, v_) * ufl.Measure("ds", domain=mesh, subdomain_data=top_tags)(1))
+    L = dolfinx.fem.form(
+        ufl.inner(load, v_) * ufl.Measure("ds", domain=mesh, subdomain_data=top_tags)(1)
+    )
     A = dolfinx.fem.petsc.assemble_matrix(a, bcs=bcs)
     A.assemble()
     u, u_old = dolfinx.fem.Function(V), dolfinx.fem.Function(V)
     reaction = dolfinx.fem.form(ufl.inner(sigma(u, material), epsilon(v_)) * ufl.dx)
     owned_x = top_x[top_x < V.dofmap.index_map.size_local * 3]
-    contact = (contact_type or NitscheContact)(V, tags, SLAVE, MASTER, material, friction, gamma0=10.0, theta=theta, lagged_friction=lagged)
+    contact = (contact_type or NitscheContact)(
+        V, tags, SLAVE, MASTER, material, friction, gamma0=10.0, theta=theta, lagged_friction=lagged
+    )
     solver = ContactNewtonSolver(A, bcs, **({"max_iterations": 40, "refactor_after": 0} | newton))
     N = q * 0.5 * 0.5
     history, results = [], []

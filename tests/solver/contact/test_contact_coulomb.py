@@ -19,7 +19,9 @@ pytestmark = pytest.mark.mpi
 
 def test_stick_then_slide_at_mu_s():
     friction = FrictionLaw(mu_s=0.3, mu_d=0.3, d_c=0.0)
-    history, _, results, _ = sliding_block(MPI.COMM_WORLD, friction, steps=8, slide_per_step=2e-4, dt=None)
+    history, _, results, _ = sliding_block(
+        MPI.COMM_WORLD, friction, steps=8, slide_per_step=2e-4, dt=None
+    )
     assert all(r.converged for r in results), [r.message for r in results]
     ratio, stick, slip = history.T
     # first step: well below the threshold, the interface mostly sticks (slip only at the edges)
@@ -62,8 +64,13 @@ def test_contact_at_the_top_of_the_slave_surface_is_detected():
 
     from solver.installation.observers import ContactZoneGuard, touches_top
 
-    _, contact, results, u = sliding_block(MPI.COMM_WORLD, FrictionLaw(mu_s=0.3, mu_d=0.3, d_c=0.0),
-                                           steps=1, slide_per_step=0.0, dt=None)
+    _, contact, results, u = sliding_block(
+        MPI.COMM_WORLD,
+        FrictionLaw(mu_s=0.3, mu_d=0.3, d_c=0.0),
+        steps=1,
+        slide_per_step=0.0,
+        dt=None,
+    )
     assert results[0].converged
     guard = ContactZoneGuard(contact, margin=0.05, zone_above=0.15)
     assert touches_top(contact, 0.05, axis=0)

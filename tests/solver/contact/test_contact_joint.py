@@ -46,13 +46,34 @@ def landing(theta: int, gamma0: float, max_gap_change: float | None):
     clamped = fem.locate_dofs_topological(V, 2, data.facet_tags.find(tags.MP_CLAMPED))
     bcs = [fem.dirichletbc(np.zeros(3), clamped, V)]
     M, K = assemble_structure(V, material, bcs)
-    contact = NitscheContact(V, data.facet_tags, tags.TP_CONTACT, tags.MP_CONTACT, material, FrictionLaw(),
-                             gamma0=gamma0, theta=theta)
-    loading = TPLoading(TopFaceLoad(V, data.facet_tags, tags.TP_TOP), static_axial=RampedAxialForce(-10e3, 2.0))
-    problem = Elastodynamics(V, M, K, bcs, load=loading, scheme=GeneralisedAlpha.from_spectral_radius(0.8),
-                             damping=RayleighDamping.at_frequency(0.01, 120.0), contact=contact,
-                             newton_options={"max_iterations": MAX_ITERATIONS, "refactor_after": 0,
-                                             "max_gap_change": max_gap_change})
+    contact = NitscheContact(
+        V,
+        data.facet_tags,
+        tags.TP_CONTACT,
+        tags.MP_CONTACT,
+        material,
+        FrictionLaw(),
+        gamma0=gamma0,
+        theta=theta,
+    )
+    loading = TPLoading(
+        TopFaceLoad(V, data.facet_tags, tags.TP_TOP), static_axial=RampedAxialForce(-10e3, 2.0)
+    )
+    problem = Elastodynamics(
+        V,
+        M,
+        K,
+        bcs,
+        load=loading,
+        scheme=GeneralisedAlpha.from_spectral_radius(0.8),
+        damping=RayleighDamping.at_frequency(0.01, 120.0),
+        contact=contact,
+        newton_options={
+            "max_iterations": MAX_ITERATIONS,
+            "refactor_after": 0,
+            "max_gap_change": max_gap_change,
+        },
+    )
     problem.initialise(0.0)
     settlement = Settlement(problem.u, joint, data.cell_tags)
 
@@ -70,9 +91,9 @@ def test_self_weight_landing_converges():
     its = [r["newton_iterations"] for r in rows]
     points = [r["contact_points"] for r in rows]
     if MPI.COMM_WORLD.rank == 0:
-        print(f"iterations {its}, settlement {[round(r['settlement_mm'], 4) for r in rows]} mm, "
-              f"points in contact {points}")
+        print(
+            f"iterations {its}, settlement {[round(r['settlement_mm'], 4) for r in rows]} mm, "
+            f"points in contact {points}"
+        )
     assert len(rows) == 8 and max(its) <= MAX_ITERATIONS
     assert max(points) > 0  # the TP landed on the MP within these steps
-
-

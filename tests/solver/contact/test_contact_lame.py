@@ -24,7 +24,9 @@ DELTA = 1e-3  # radial interference [m]
 THICKNESS = 0.05  # axial slice [m]
 
 
-def radial_displacement(material: Material, r_in: float, r_out: float, p_in: float, p_out: float, r: float) -> float:
+def radial_displacement(
+    material: Material, r_in: float, r_out: float, p_in: float, p_out: float, r: float
+) -> float:
     """Plane-strain Lamé radial displacement [m] of a ring under inner/outer pressure [Pa]."""
     E, nu = material.E, material.nu
     A = (p_in * r_in**2 - p_out * r_out**2) / (r_out**2 - r_in**2)
@@ -35,7 +37,9 @@ def radial_displacement(material: Material, r_in: float, r_out: float, p_in: flo
 
 @pytest.mark.parametrize("theta, gamma0", [(1, 30.0), (-1, 30.0), (-1, 1.0)])
 def test_press_fit_pressure(theta, gamma0):
-    mesh, _, tags = two_rings(MPI.COMM_WORLD, (A_, B_, C_), DELTA, THICKNESS, inner=(2, 12), outer=(2, 9))
+    mesh, _, tags = two_rings(
+        MPI.COMM_WORLD, (A_, B_, C_), DELTA, THICKNESS, inner=(2, 12), outer=(2, 9)
+    )
     V = dolfinx.fem.functionspace(mesh, ("Lagrange", 2, (3,)))
     material = Material(E=210e9, nu=0.3)
     bcs = [
@@ -44,7 +48,9 @@ def test_press_fit_pressure(theta, gamma0):
         fixed(V, 2, lambda x: np.isclose(x[2], 0.0) | np.isclose(x[2], THICKNESS)),
     ]
     A, b = elastic_system(V, material, bcs)
-    contact = NitscheContact(V, tags, SLAVE, MASTER, material, FrictionLaw(0.5, 0.5, 0.0), gamma0=gamma0, theta=theta)
+    contact = NitscheContact(
+        V, tags, SLAVE, MASTER, material, FrictionLaw(0.5, 0.5, 0.0), gamma0=gamma0, theta=theta
+    )
     u = dolfinx.fem.Function(V)
     result = solve_contact_problem(A, b, contact, u, bcs, refactor_after=0)
     assert result.converged, result.message
@@ -54,10 +60,15 @@ def test_press_fit_pressure(theta, gamma0):
     p_exact = DELTA / (unit_outer - unit_inner)
 
     comm = mesh.comm
-    w, p, status = (gathered(comm, a) for a in (contact.slave.weights, contact.state.pressure, contact.state.status))
+    w, p, status = (
+        gathered(comm, a)
+        for a in (contact.slave.weights, contact.state.pressure, contact.state.status)
+    )
     assert np.all(status == Status.STICK)  # radial problem: no slip
     if comm.rank == 0:
-        print(f"theta {theta}, gamma0 {gamma0}: mean pressure / exact - 1 = {(w @ p) / w.sum() / p_exact - 1:.2e}")
+        print(
+            f"theta {theta}, gamma0 {gamma0}: mean pressure / exact - 1 = {(w @ p) / w.sum() / p_exact - 1:.2e}"
+        )
     assert (w @ p) / w.sum() == pytest.approx(p_exact, rel=2e-2)
 
     # the bulk field away from the interface: radial displacement of the free surfaces

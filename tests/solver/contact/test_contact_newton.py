@@ -60,8 +60,9 @@ def _jacobian_error(contact, u, w, eps, rows=None):
 def sliding_state():
     friction = FrictionLaw(mu_s=0.5, mu_d=0.4, d_c=5000.0)
     # a tight Newton tolerance, so that the last step shows enough iterations for its rate
-    history, contact, results, u = sliding_block(MPI.COMM_WORLD, friction, steps=6, slide_per_step=2e-4, dt=1.0,
-                                                 rtol=1e-9)
+    history, contact, results, u = sliding_block(
+        MPI.COMM_WORLD, friction, steps=6, slide_per_step=2e-4, dt=1.0, rtol=1e-9
+    )
     assert all(r.converged for r in results)
     return contact, u, results
 
@@ -84,7 +85,10 @@ def test_jacobian_is_consistent_for_slave_motion(sliding_state):
     mesh = V.mesh
     # keep the block's displacement, reset the base to its undeformed (flat) shape, now and
     # at the step's start (the block then was 0.2 mm further back)
-    cells = np.arange(mesh.topology.index_map(3).size_local + mesh.topology.index_map(3).num_ghosts, dtype=np.int32)
+    cells = np.arange(
+        mesh.topology.index_map(3).size_local + mesh.topology.index_map(3).num_ghosts,
+        dtype=np.int32,
+    )
     block = cells[dolfinx.mesh.compute_midpoints(mesh, 3, cells)[:, 2] > 0]
     on_block = np.zeros(u.x.array.size // 3, dtype=bool)
     on_block[V.dofmap.list[block].ravel()] = True
@@ -114,17 +118,23 @@ def test_jacobian_at_the_step_start_ignores_round_off(sliding_state):
     contact.friction = FrictionLaw(mu_s=0.3, mu_d=0.2, d_c=friction.d_c)
     contact.set_reference(u, 1.0)
     contact.update(u)
-    slipping = MPI.COMM_WORLD.allreduce(int(np.sum(contact.state.status == Status.SLIP)), op=MPI.SUM)
+    slipping = MPI.COMM_WORLD.allreduce(
+        int(np.sum(contact.state.status == Status.SLIP)), op=MPI.SUM
+    )
     assert slipping > 0
     exact = contact.jacobian().copy()
     noisy = u.copy()
     rng = np.random.default_rng(7 + MPI.COMM_WORLD.rank)
-    noisy.x.array[:] += 4 * np.finfo(float).eps * np.abs(u.x.array).max() * rng.uniform(-1, 1, u.x.array.size)
+    noisy.x.array[:] += (
+        4 * np.finfo(float).eps * np.abs(u.x.array).max() * rng.uniform(-1, 1, u.x.array.size)
+    )
     noisy.x.scatter_forward()
     contact.update(noisy)
     perturbed = contact.jacobian()
     # dt = 1 s: the slip velocity [m/s] is the slip increment ds [m]
-    ds_max = MPI.COMM_WORLD.allreduce(float(np.abs(contact.state.slip_velocity).max(initial=0.0)), op=MPI.MAX)
+    ds_max = MPI.COMM_WORLD.allreduce(
+        float(np.abs(contact.state.slip_velocity).max(initial=0.0)), op=MPI.MAX
+    )
     assert 0.0 < ds_max < 1e-17  # ds is round-off (both times; 0 or 1e-19 m without the noise)
     perturbed.axpy(-1.0, exact, structure=PETSc.Mat.Structure.DIFFERENT_NONZERO_PATTERN)
     assert perturbed.norm() < 1e-9 * exact.norm()
@@ -155,7 +165,9 @@ class _RecordedContact(NitscheContact):
 
     def update(self, u):
         super().update(u)
-        self.__dict__.setdefault("statuses", []).append(gathered(self.V.mesh.comm, self.state.status))
+        self.__dict__.setdefault("statuses", []).append(
+            gathered(self.V.mesh.comm, self.state.status)
+        )
 
     def residual_floor(self) -> float:
         return 0.0
@@ -168,7 +180,9 @@ class _WithoutSlope(FrictionLaw):
         return np.zeros_like(np.asarray(slip_speed, dtype=float))
 
 
-def _rigid_base_step(theta: int, friction: FrictionLaw, **newton) -> tuple[np.ndarray, list[np.ndarray], np.ndarray]:
+def _rigid_base_step(
+    theta: int, friction: FrictionLaw, **newton
+) -> tuple[np.ndarray, list[np.ndarray], np.ndarray]:
     """Residual norms [N] and statuses of every iterate of the last of 6 sliding steps on a rigid
     base, and the final displacement (local array).
 
@@ -177,11 +191,18 @@ def _rigid_base_step(theta: int, friction: FrictionLaw, **newton) -> tuple[np.nd
     test (12 iterations).
     """
     _, contact, results, u = sliding_block(
-        MPI.COMM_WORLD, friction, steps=6, slide_per_step=2e-4, dt=0.02, theta=theta, rigid_base=True,
-        contact_type=_RecordedContact, **({"rtol": 1e-30, "atol": 0.0, "stol": 0.0, "max_iterations": 12} | newton),
+        MPI.COMM_WORLD,
+        friction,
+        steps=6,
+        slide_per_step=2e-4,
+        dt=0.02,
+        theta=theta,
+        rigid_base=True,
+        contact_type=_RecordedContact,
+        **({"rtol": 1e-30, "atol": 0.0, "stol": 0.0, "max_iterations": 12} | newton),
     )
     norms = np.array(results[-1].residual_norms)
-    return norms, contact.statuses[-len(norms):], u.x.array.copy()
+    return norms, contact.statuses[-len(norms) :], u.x.array.copy()
 
 
 def _settled(norms: np.ndarray, statuses: list[np.ndarray], roundoff: float) -> np.ndarray:
@@ -224,7 +245,9 @@ def test_inexact_newton_with_reused_factors():
     rate stays superlinear once the sets settle (order >= 1.5; the forcing term is O(||F||))."""
     friction = FrictionLaw(mu_s=0.5, mu_d=0.4, d_c=100.0)
     exact_norms, _, exact = _rigid_base_step(1, friction)
-    norms, statuses, u = _rigid_base_step(1, friction, refactor_after=25, forcing_max=1e-3, max_iterations=20)
+    norms, statuses, u = _rigid_base_step(
+        1, friction, refactor_after=25, forcing_max=1e-3, max_iterations=20
+    )
     comm = MPI.COMM_WORLD
     difference = np.sqrt(comm.allreduce(float(np.sum((u - exact) ** 2)), op=MPI.SUM))
     size = np.sqrt(comm.allreduce(float(np.sum(exact**2)), op=MPI.SUM))
@@ -245,11 +268,17 @@ def test_distributed_newton_follows_the_serial_one():
         pytest.skip("compares a distributed run with a serial one (runs under mpiexec -n 2)")
     friction = FrictionLaw(mu_s=0.5, mu_d=0.4, d_c=100.0)
     newton = {"rtol": 1e-30, "atol": 0.0, "stol": 0.0, "max_iterations": 12}
-    runs = [sliding_block(c, friction, steps=6, slide_per_step=2e-4, dt=0.02, rigid_base=True, **newton)[2]
-            for c in (MPI.COMM_SELF, comm)]
+    runs = [
+        sliding_block(
+            c, friction, steps=6, slide_per_step=2e-4, dt=0.02, rigid_base=True, **newton
+        )[2]
+        for c in (MPI.COMM_SELF, comm)
+    ]
     for serial, distributed in zip(*runs):
         a, b = np.array(serial.residual_norms), np.array(distributed.residual_norms)
-        k = int(np.argmax(a < 1e-7 * a[0])) if np.any(a < 1e-7 * a[0]) else len(a)  # iterates above round-off
+        k = (
+            int(np.argmax(a < 1e-7 * a[0])) if np.any(a < 1e-7 * a[0]) else len(a)
+        )  # iterates above round-off
         assert len(b) >= k, (a, b)  # (round-off is at 1e-14 - 1e-13 of F_0)
         assert np.allclose(b[:k], a[:k], rtol=1e-8, atol=0.0), (a, b)
 
@@ -264,7 +293,10 @@ def test_reversal_limit_stops_where_the_friction_would_reverse(sliding_state):
     V = u.function_space
     mesh = V.mesh
     comm = mesh.comm
-    cells = np.arange(mesh.topology.index_map(3).size_local + mesh.topology.index_map(3).num_ghosts, dtype=np.int32)
+    cells = np.arange(
+        mesh.topology.index_map(3).size_local + mesh.topology.index_map(3).num_ghosts,
+        dtype=np.int32,
+    )
     block = cells[dolfinx.mesh.compute_midpoints(mesh, 3, cells)[:, 2] > 0]
     on_block = np.zeros(u.x.array.size // 3, dtype=bool)
     on_block[V.dofmap.list[block].ravel()] = True
@@ -282,11 +314,15 @@ def test_reversal_limit_stops_where_the_friction_would_reverse(sliding_state):
     contact.update(back)
     limit = comm.allreduce(contact.reversal_limit(slipping, P_t0), op=MPI.MIN)
     size = np.linalg.norm(P_t0, axis=1)
-    rate = contact.gamma * d * P_t0[:, 0] / np.where(size > 0, size, 1.0)  # d(P_t . q0) / d alpha [Pa]
+    rate = (
+        contact.gamma * d * P_t0[:, 0] / np.where(size > 0, size, 1.0)
+    )  # d(P_t . q0) / d alpha [Pa]
     mu = contact.friction.coefficient(np.linalg.norm(contact.state.slip_velocity, axis=1))
     reversing = slipping & (size + rate < -mu * contact.state.pressure)
     assert comm.allreduce(int(reversing.sum()), op=MPI.SUM) > 0
-    expected = comm.allreduce(float((size[reversing] / -rate[reversing]).min(initial=np.inf)), op=MPI.MIN)
+    expected = comm.allreduce(
+        float((size[reversing] / -rate[reversing]).min(initial=np.inf)), op=MPI.MIN
+    )
     assert 0.0 < expected < 1.0
     assert limit == pytest.approx(expected, rel=1e-9)
     # a step that goes no further than that reverses nothing
@@ -304,15 +340,35 @@ def test_reversal_limit_changes_the_path_not_the_solution():
     friction = FrictionLaw(mu_s=0.5, mu_d=0.4, d_c=100.0)
     drags = [2e-4, 4e-4, 6e-4, 5e-4, 4e-4, 3e-4, 4e-4, 5e-4]  # top face x displacement per step [m]
     comm = MPI.COMM_WORLD
-    runs = [sliding_block(comm, friction, steps=0, slide_per_step=0.0, dt=0.02, drags=drags, rtol=1e-10,
-                          max_backtracks=4, limit_reversal=limit) for limit in (True, False)]
+    runs = [
+        sliding_block(
+            comm,
+            friction,
+            steps=0,
+            slide_per_step=0.0,
+            dt=0.02,
+            drags=drags,
+            rtol=1e-10,
+            max_backtracks=4,
+            limit_reversal=limit,
+        )
+        for limit in (True, False)
+    ]
     (history, _, results, u), (history_free, _, results_free, u_free) = runs
     assert all(r.converged for r in results + results_free)
-    assert [r.iterations for r in results] != [r.iterations for r in results_free]  # the limit acted
-    difference = np.sqrt(comm.allreduce(float(np.sum((u.x.array - u_free.x.array) ** 2)), op=MPI.SUM))
-    size = np.sqrt(comm.allreduce(float(np.sum(u_free.x.array ** 2)), op=MPI.SUM))
-    print(f"\nreversal limit: Newton iterations {[r.iterations for r in results]} against "
-          f"{[r.iterations for r in results_free]}; displacement difference {difference / size:.1e} relative")
+    assert [r.iterations for r in results] != [
+        r.iterations for r in results_free
+    ]  # the limit acted
+    difference = np.sqrt(
+        comm.allreduce(float(np.sum((u.x.array - u_free.x.array) ** 2)), op=MPI.SUM)
+    )
+    size = np.sqrt(comm.allreduce(float(np.sum(u_free.x.array**2)), op=MPI.SUM))
+    print(
+        f"\nreversal limit: Newton iterations {[r.iterations for r in results]} against "
+        f"{[r.iterations for r in results_free]}; displacement difference {difference / size:.1e} relative"
+    )
     assert difference < 1e-8 * size
     assert np.allclose(history, history_free, rtol=1e-8, atol=1e-10)
-    assert np.min(np.diff(history[:, 0])) < 0 < np.max(np.diff(history[:, 0]))  # the friction force reversed
+    assert (
+        np.min(np.diff(history[:, 0])) < 0 < np.max(np.diff(history[:, 0]))
+    )  # the friction force reversed

@@ -37,13 +37,17 @@ def test_uniform_pressure(degree, theta, mu, gamma0):
         fixed(V, 2, lambda x: np.isclose(x[2], 0.5), -delta),
     ]
     A, b = elastic_system(V, material, bcs)
-    contact = NitscheContact(V, tags, SLAVE, MASTER, material, FrictionLaw(mu, mu, 0.0), gamma0=gamma0, theta=theta)
+    contact = NitscheContact(
+        V, tags, SLAVE, MASTER, material, FrictionLaw(mu, mu, 0.0), gamma0=gamma0, theta=theta
+    )
     u = dolfinx.fem.Function(V)
     result = solve_contact_problem(A, b, contact, u, bcs)
     assert result.converged, result.message
     p_exact = material.E * delta / 1.0
     comm = mesh.comm
-    status, pressure, gap = (gathered(comm, a) for a in (contact.state.status, contact.state.pressure, contact.state.gap))
+    status, pressure, gap = (
+        gathered(comm, a) for a in (contact.state.status, contact.state.pressure, contact.state.gap)
+    )
     assert np.all(status != Status.OPEN)
     assert np.allclose(pressure, p_exact, rtol=1e-2)
     assert np.abs(gap).max() < 1e-6 * delta  # Nitsche is consistent: no penalty-like penetration
@@ -58,8 +62,12 @@ def test_interface_stiffness_of_another_variant():
     mesh, _, tags = two_blocks(MPI.COMM_WORLD, lower=(3, 3, 2), upper=(4, 5, 2))
     V = dolfinx.fem.functionspace(mesh, ("Lagrange", 2, (3,)))
     material = Material(E=1e9, nu=0.3)
-    stepping = NitscheContact(V, tags, SLAVE, MASTER, material, FrictionLaw(0.5, 0.5, 0.0), gamma0=1.0, theta=-1)
-    modal = NitscheContact(V, tags, SLAVE, MASTER, material, FrictionLaw(0.5, 0.5, 0.0), gamma0=30.0, theta=1)
+    stepping = NitscheContact(
+        V, tags, SLAVE, MASTER, material, FrictionLaw(0.5, 0.5, 0.0), gamma0=1.0, theta=-1
+    )
+    modal = NitscheContact(
+        V, tags, SLAVE, MASTER, material, FrictionLaw(0.5, 0.5, 0.0), gamma0=30.0, theta=1
+    )
     S = stepping.interface_stiffness(Status.STICK, theta=1, gamma0=30.0)
     S_ref = modal.interface_stiffness(Status.STICK)
     S_own = stepping.interface_stiffness(Status.STICK)

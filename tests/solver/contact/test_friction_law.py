@@ -20,7 +20,9 @@ def test_derivative_matches_finite_difference():
     assert law.derivative(v) == pytest.approx(fd, rel=1e-6)
 
 
-@pytest.mark.parametrize("kwargs", [dict(mu_s=0.3, mu_d=0.4), dict(d_c=-1.0), dict(mu_s=-0.1, mu_d=-0.2)])
+@pytest.mark.parametrize(
+    "kwargs", [dict(mu_s=0.3, mu_d=0.4), dict(d_c=-1.0), dict(mu_s=-0.1, mu_d=-0.2)]
+)
 def test_bad_parameters_raise(kwargs):
     with pytest.raises(ValueError):
         FrictionLaw(**kwargs)

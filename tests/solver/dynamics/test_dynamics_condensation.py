@@ -52,8 +52,17 @@ def coarse_joint():
     clamped = fem.locate_dofs_topological(V, 2, data.facet_tags.find(tags.MP_CLAMPED))
     bcs = [fem.dirichletbc(np.zeros(3), clamped, V)]
     M, K = assemble_structure(V, material, bcs)
-    contact = NitscheContact(V, data.facet_tags, tags.TP_CONTACT, tags.MP_CONTACT, material,
-                             FrictionLaw(0.5, 0.4, d_c=100.0), gamma0=1.0, theta=-1, lagged_friction=True)
+    contact = NitscheContact(
+        V,
+        data.facet_tags,
+        tags.TP_CONTACT,
+        tags.MP_CONTACT,
+        material,
+        FrictionLaw(0.5, 0.4, d_c=100.0),
+        gamma0=1.0,
+        theta=-1,
+        lagged_friction=True,
+    )
     return joint, data, V, bcs, M, K, contact
 
 
@@ -116,13 +125,25 @@ def test_update_equals_a_new_condensation():
 
 def settle(condense_bulk: bool):
     joint, data, V, bcs, M, K, contact = coarse_joint()
-    loading = TPLoading(TopFaceLoad(V, data.facet_tags, tags.TP_TOP), static_axial=RampedAxialForce(-10e3, 0.2))
-    problem = Elastodynamics(V, M, K, bcs, load=loading, scheme=GeneralisedAlpha.from_spectral_radius(0.0),
-                             damping=RayleighDamping.at_frequency(0.01, 120.0), contact=contact,
-                             newton_options={"max_backtracks": 4, "max_gap_change": 1e-5},
-                             condense_bulk=condense_bulk)
+    loading = TPLoading(
+        TopFaceLoad(V, data.facet_tags, tags.TP_TOP), static_axial=RampedAxialForce(-10e3, 0.2)
+    )
+    problem = Elastodynamics(
+        V,
+        M,
+        K,
+        bcs,
+        load=loading,
+        scheme=GeneralisedAlpha.from_spectral_radius(0.0),
+        damping=RayleighDamping.at_frequency(0.01, 120.0),
+        contact=contact,
+        newton_options={"max_backtracks": 4, "max_gap_change": 1e-5},
+        condense_bulk=condense_bulk,
+    )
     problem.initialise(0.0)
-    rows = run(problem, 0.3, 0.01, observers=[Settlement(problem.u, joint, data.cell_tags)], progress=False)
+    rows = run(
+        problem, 0.3, 0.01, observers=[Settlement(problem.u, joint, data.cell_tags)], progress=False
+    )
     return np.array([r["settlement_mm"] for r in rows]), contact.state.status.copy()
 
 
@@ -130,8 +151,10 @@ def test_condensed_dynamics_matches_uncondensed():
     s_full, status_full = settle(condense_bulk=False)
     s_cond, status_cond = settle(condense_bulk=True)
     if MPI.COMM_WORLD.rank == 0:
-        print(f"settlement {s_full[-1]:.9f} mm (uncondensed), {s_cond[-1]:.9f} mm (condensed), "
-              f"largest difference {np.abs(s_full - s_cond).max():.3e} mm")
+        print(
+            f"settlement {s_full[-1]:.9f} mm (uncondensed), {s_cond[-1]:.9f} mm (condensed), "
+            f"largest difference {np.abs(s_full - s_cond).max():.3e} mm"
+        )
     assert s_full[-1] > 0.5  # the TP landed and slid
     assert np.abs(s_full - s_cond).max() <= 1e-6 * np.abs(s_full).max()
     assert np.array_equal(status_full, status_cond)

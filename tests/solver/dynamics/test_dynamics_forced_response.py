@@ -81,13 +81,25 @@ def time_domain_amplitude(joint, scheme, excitation_hz: float, steps_per_period:
     V, M, K, bcs, f_n, point, F = joint
     dt = 1.0 / (excitation_hz * steps_per_period)
     w = 2 * np.pi * excitation_hz
-    problem = Elastodynamics(V, M, K, bcs, load=lambda t, out: out.axpy(np.sin(w * t), F), scheme=scheme,
-                             damping=RayleighDamping.at_frequency(ZETA, f_n))
+    problem = Elastodynamics(
+        V,
+        M,
+        K,
+        bcs,
+        load=lambda t, out: out.axpy(np.sin(w * t), F),
+        scheme=scheme,
+        damping=RayleighDamping.at_frequency(ZETA, f_n),
+    )
     problem.initialise(0.0)
     probe = PointProbe(problem.u, point[None, :])
-    rows = run(problem, PERIODS / excitation_hz, dt, observers=[lambda p: dict(zip("xyz", probe()[0]))],
-               progress=False)
-    last = rows[-FIT_PERIODS * steps_per_period:]
+    rows = run(
+        problem,
+        PERIODS / excitation_hz,
+        dt,
+        observers=[lambda p: dict(zip("xyz", probe()[0]))],
+        progress=False,
+    )
+    last = rows[-FIT_PERIODS * steps_per_period :]
     t = np.array([r["time_s"] for r in last])
     x = np.array([[r[c] for c in "xyz"] for r in last])
     return steady_amplitude(t, x, excitation_hz)
@@ -120,8 +132,10 @@ def test_resonant_amplitude_matches_the_frequency_domain(joint, name):
     compensated = time_domain_amplitude(joint, scheme, f_c, steps)
     uncompensated = time_domain_amplitude(joint, scheme, f_n, steps)
     if MPI.COMM_WORLD.rank == 0:
-        print(f"{name}: f_n = {f_n:.3f} Hz, frequency domain {1e6 * reference:.4f} um; time domain at the "
-              f"compensated {f_c:.3f} Hz {1e6 * compensated:.4f} um ({compensated / reference - 1:+.2%}), "
-              f"at f_n {1e6 * uncompensated:.4f} um ({uncompensated / reference - 1:+.2%})")
+        print(
+            f"{name}: f_n = {f_n:.3f} Hz, frequency domain {1e6 * reference:.4f} um; time domain at the "
+            f"compensated {f_c:.3f} Hz {1e6 * compensated:.4f} um ({compensated / reference - 1:+.2%}), "
+            f"at f_n {1e6 * uncompensated:.4f} um ({uncompensated / reference - 1:+.2%})"
+        )
     assert compensated == pytest.approx(reference, rel=0.05)
     assert uncompensated < 0.95 * reference

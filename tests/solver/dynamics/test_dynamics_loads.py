@@ -12,13 +12,27 @@ from dolfinx import fem
 from geometry import tags
 from geometry.mesh import create_tube_mesh
 from geometry.parameters import ConePart, MeshOptions
-from solver.dynamics.loads import (PointLoad, RampedAxialForce, Schedule, Stage, TopFaceLoad, TPLoading,
-                          eccentric_amplitude, shaker_point)
+from solver.dynamics.loads import (
+    PointLoad,
+    RampedAxialForce,
+    Schedule,
+    Stage,
+    TopFaceLoad,
+    TPLoading,
+    eccentric_amplitude,
+    shaker_point,
+)
 
 pytestmark = pytest.mark.mpi
 
-TP = ConePart(half_angle_deg=1.0, bottom_outer_diameter=0.61, cone_length=1.0, straight_length=0.4,
-              thickness=0.006, straight_part="above")
+TP = ConePart(
+    half_angle_deg=1.0,
+    bottom_outer_diameter=0.61,
+    cone_length=1.0,
+    straight_length=0.4,
+    thickness=0.006,
+    straight_part="above",
+)
 
 
 def test_eccentric_law():
@@ -26,12 +40,16 @@ def test_eccentric_law():
     assert eccentric_amplitude(100.0) == pytest.approx(3632.0)
     assert eccentric_amplitude(68.0) == pytest.approx(0.3632 * 68.0**2)
     stage = Stage(duration_s=0.1, frequency_hz=50.0, frequency_end_hz=150.0)
-    assert stage.amplitude(0.05) == pytest.approx(0.3632 * 100.0**2)  # at the instantaneous frequency
+    assert stage.amplitude(0.05) == pytest.approx(
+        0.3632 * 100.0**2
+    )  # at the instantaneous frequency
 
 
 def test_self_weight_ramp():
     ramp = RampedAxialForce(force_N=-10e3, ramp_time_s=2.0)
-    assert [ramp(t) for t in (-1.0, 0.0, 0.5, 2.0, 5.0)] == pytest.approx([0, 0, -2.5e3, -10e3, -10e3])
+    assert [ramp(t) for t in (-1.0, 0.0, 0.5, 2.0, 5.0)] == pytest.approx(
+        [0, 0, -2.5e3, -10e3, -10e3]
+    )
 
 
 def reference_schedule() -> Schedule:
@@ -39,8 +57,14 @@ def reference_schedule() -> Schedule:
         dict(duration_s=0.1, frequency_hz=68.0),
         dict(duration_s=0.1, frequency_hz=100.0),
         dict(duration_s=0.37, frequency_hz=10.0, frequency_end_hz=125.0, amplitude_N=3600.0),
-        dict(duration_s=0.2, frequency_hz=120.0, amplitude_N=1000.0, amplitude_end_N=3000.0,
-             direction="both", lateral_fraction=0.05),
+        dict(
+            duration_s=0.2,
+            frequency_hz=120.0,
+            amplitude_N=1000.0,
+            amplitude_end_N=3000.0,
+            direction="both",
+            lateral_fraction=0.05,
+        ),
     ]
     return Schedule.from_dicts(stages, start_s=2.0)
 
@@ -48,14 +72,22 @@ def reference_schedule() -> Schedule:
 def test_phase_is_the_integral_of_the_frequency_and_continuous():
     schedule = reference_schedule()
     for t in np.linspace(2.0, schedule.end_s, 23):
-        expected, _ = quad(lambda s: 2 * math.pi * schedule.frequency(s), 2.0, t, points=schedule.stage_starts,
-                           limit=200, epsabs=1e-11)
+        expected, _ = quad(
+            lambda s: 2 * math.pi * schedule.frequency(s),
+            2.0,
+            t,
+            points=schedule.stage_starts,
+            limit=200,
+            epsabs=1e-11,
+        )
         assert schedule.phase(t) == pytest.approx(expected, abs=1e-8)
     for t_k in schedule.stage_starts[1:]:  # no jump at stage boundaries, even where f jumps
         assert abs(schedule.phase(t_k + 1e-12) - schedule.phase(t_k - 1e-12)) < 1e-8
     # the force oscillates at the instantaneous frequency: zero crossings of the 100 Hz stage
     t100 = schedule.stage_starts[1]
-    assert math.sin(schedule.phase(t100)) == pytest.approx(math.sin(2 * math.pi * 68.0 * 0.1), abs=1e-12)
+    assert math.sin(schedule.phase(t100)) == pytest.approx(
+        math.sin(2 * math.pi * 68.0 * 0.1), abs=1e-12
+    )
 
 
 def test_schedule_force_directions_and_ramps():
@@ -69,7 +101,9 @@ def test_schedule_force_directions_and_ramps():
 
 
 def test_mode_frequencies_are_filled_in():
-    schedule = Schedule.from_dicts([dict(duration_s=0.1, frequency_hz="mode 2", amplitude_N=3600.0)])
+    schedule = Schedule.from_dicts(
+        [dict(duration_s=0.1, frequency_hz="mode 2", amplitude_N=3600.0)]
+    )
     with pytest.raises(ValueError, match="natural frequencies"):
         schedule.force(0.05)
     filled = schedule.with_natural_frequencies([80.0, 120.0])
@@ -78,17 +112,20 @@ def test_mode_frequencies_are_filled_in():
         schedule.with_natural_frequencies([80.0])
 
 
-@pytest.mark.parametrize("stage, match", [
-    (dict(duration_s=-0.1, frequency_hz=10.0), "duration_s"),
-    (dict(duration_s=0.1, frequency_hz=-10.0), "frequency_hz"),
-    (dict(duration_s=0.1, frequency_hz="fast"), "frequency_hz"),
-    (dict(duration_s=0.1, frequency_hz=10.0, amplitude_N="big"), "amplitude_N"),
-    (dict(duration_s=0.1, frequency_hz=10.0, amplitude_end_N=5.0), "eccentric"),
-    (dict(duration_s=0.1, frequency_hz=10.0, direction="sideways"), "direction"),
-    (dict(duration_s=0.1, frequency_hz=10.0, lateral_fraction=2.0), "lateral_fraction"),
-    (dict(duration_s=0.1, frequency_hz=10.0, frequncy_end_hz=20.0), "unknown key"),
-    (dict(frequency_hz=10.0), "duration_s"),
-])
+@pytest.mark.parametrize(
+    "stage, match",
+    [
+        (dict(duration_s=-0.1, frequency_hz=10.0), "duration_s"),
+        (dict(duration_s=0.1, frequency_hz=-10.0), "frequency_hz"),
+        (dict(duration_s=0.1, frequency_hz="fast"), "frequency_hz"),
+        (dict(duration_s=0.1, frequency_hz=10.0, amplitude_N="big"), "amplitude_N"),
+        (dict(duration_s=0.1, frequency_hz=10.0, amplitude_end_N=5.0), "eccentric"),
+        (dict(duration_s=0.1, frequency_hz=10.0, direction="sideways"), "direction"),
+        (dict(duration_s=0.1, frequency_hz=10.0, lateral_fraction=2.0), "lateral_fraction"),
+        (dict(duration_s=0.1, frequency_hz=10.0, frequncy_end_hz=20.0), "unknown key"),
+        (dict(frequency_hz=10.0), "duration_s"),
+    ],
+)
 def test_bad_schedules_raise(stage, match):
     with pytest.raises(ValueError, match=match):
         Schedule.from_dicts([stage])
@@ -122,8 +159,11 @@ def test_top_face_load_integrates_to_the_requested_force(tube):
     top = TopFaceLoad(V, facet_tags, tags.TOP)
     r_o, r_i = TP.outer_radius(TP.total_length), TP.inner_radius(TP.total_length)
     assert top.area == pytest.approx(math.pi * (r_o**2 - r_i**2), rel=2e-3)  # curved hex27 annulus
-    loading = TPLoading(top, static_axial=RampedAxialForce(-10e3, 2.0),
-                        schedule=Schedule([Stage(0.1, 100.0, direction="lateral")], start_s=2.0))
+    loading = TPLoading(
+        top,
+        static_axial=RampedAxialForce(-10e3, 2.0),
+        schedule=Schedule([Stage(0.1, 100.0, direction="lateral")], start_s=2.0),
+    )
     vec = fem.petsc.create_vector(V)
     for t in (1.0, 2.0 + 0.3 / 400):  # during the ramp; during the shaking
         vec.set(0.0)
@@ -160,11 +200,20 @@ def test_point_outside_the_body_raises(tube):
 def test_rayleigh_from_case_table():
     from solver.dynamics.damping import RayleighDamping, rayleigh_from_dict
 
-    assert rayleigh_from_dict({"zeta": 0.01, "frequency_hz": 120.0}) == RayleighDamping.at_frequency(0.01, 120.0)
-    two = rayleigh_from_dict({"kind": "rayleigh", "zeta": [0.01, 0.02], "frequency_hz": [50.0, 200.0]})
+    assert rayleigh_from_dict(
+        {"zeta": 0.01, "frequency_hz": 120.0}
+    ) == RayleighDamping.at_frequency(0.01, 120.0)
+    two = rayleigh_from_dict(
+        {"kind": "rayleigh", "zeta": [0.01, 0.02], "frequency_hz": [50.0, 200.0]}
+    )
     assert two.ratio(200.0) == pytest.approx(0.02)
     assert rayleigh_from_dict({"a": 1.0}) == RayleighDamping(a=1.0, b=0.0)
-    for bad in ({"zeta": 0.01}, {"zeta": [0.01], "frequency_hz": [50.0]}, {"kind": "modal", "zeta": 0.01},
-                {"zeta": 0.01, "frequency_hz": -5.0}, {"a": -1.0}):
+    for bad in (
+        {"zeta": 0.01},
+        {"zeta": [0.01], "frequency_hz": [50.0]},
+        {"kind": "modal", "zeta": 0.01},
+        {"zeta": 0.01, "frequency_hz": -5.0},
+        {"a": -1.0},
+    ):
         with pytest.raises(ValueError):
             rayleigh_from_dict(bad)

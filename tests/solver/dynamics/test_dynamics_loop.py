@@ -43,8 +43,14 @@ def test_step_is_cut_and_regrown(shared_tmp):
     comm = MPI.COMM_WORLD
     path = shared_tmp / "history.csv"  # written by rank 0
     with CsvWriter(path, comm=comm) as writer:
-        rows = run(problem, 1.0, 0.1, observers=[lambda p: {"settlement_mm": 10 * p.t}],
-                   on_row=writer.write, progress=False)
+        rows = run(
+            problem,
+            1.0,
+            0.1,
+            observers=[lambda p: {"settlement_mm": 10 * p.t}],
+            on_row=writer.write,
+            progress=False,
+        )
     steps = [r["dt_s"] for r in rows]
     assert sum(steps) == pytest.approx(1.0)
     assert min(steps) == pytest.approx(0.025)  # 0.1 -> 0.05 -> 0.025 <= 0.03
@@ -59,12 +65,17 @@ def test_step_is_cut_and_regrown(shared_tmp):
 
 def test_minimum_step_gives_a_clear_error():
     problem = FlakyProblem(t_hard=0.35, max_ok=1e-9)
-    with pytest.raises(RuntimeError, match=r"t = 0.3375 s even with dt = 0.0125 s \(minimum step 0.01 s\): no convergence \(test\)"):
+    with pytest.raises(
+        RuntimeError,
+        match=r"t = 0.3375 s even with dt = 0.0125 s \(minimum step 0.01 s\): no convergence \(test\)",
+    ):
         run(problem, 1.0, 0.1, dt_min=0.01, progress=False)
 
 
-@pytest.mark.parametrize("kwargs", [dict(t_end=-1.0, dt=0.1), dict(t_end=1.0, dt=0.0),
-                                    dict(t_end=1.0, dt=0.1, dt_min=0.2)])
+@pytest.mark.parametrize(
+    "kwargs",
+    [dict(t_end=-1.0, dt=0.1), dict(t_end=1.0, dt=0.0), dict(t_end=1.0, dt=0.1, dt_min=0.2)],
+)
 def test_bad_run_arguments_raise(kwargs):
     with pytest.raises(ValueError):
         run(FlakyProblem(2.0, 1.0), progress=False, **kwargs)
@@ -73,7 +84,9 @@ def test_bad_run_arguments_raise(kwargs):
 @pytest.fixture(scope="module")
 def joint_space():
     joint, _, _ = load_geometry(resolve_case_path("scaled"))
-    data = create_joint_mesh(MPI.COMM_WORLD, joint, MeshOptions(n_circumferential=8, axial_size=0.5))
+    data = create_joint_mesh(
+        MPI.COMM_WORLD, joint, MeshOptions(n_circumferential=8, axial_size=0.5)
+    )
     V = fem.functionspace(data.mesh, ("Lagrange", 2, (3,)))
     return joint, V, data.cell_tags
 
@@ -82,14 +95,18 @@ def test_settlement_definition(joint_space):
     joint, V, cell_tags = joint_space
     u = fem.Function(V)
     settlement = Settlement(u, joint, cell_tags)
-    u.interpolate(lambda x: np.vstack([0.001 * x[1], -0.002 + 0 * x[0], 0.003 + 0 * x[0]]))  # rigid-ish motion
+    u.interpolate(
+        lambda x: np.vstack([0.001 * x[1], -0.002 + 0 * x[0], 0.003 + 0 * x[0]])
+    )  # rigid-ish motion
     assert settlement()["settlement_mm"] == pytest.approx(0.0, abs=1e-12)
     mesh = V.mesh
     chi = fem.Function(fem.functionspace(mesh, ("DG", 0)))  # 1 on the TP
     tp_cells = cell_tags.find(tags.TP_VOLUME)
     chi.x.array[tp_cells[tp_cells < mesh.topology.index_map(3).size_local]] = 1.0
     chi.x.scatter_forward()
-    u.interpolate(fem.Expression(ufl.as_vector([0.0, 0.0, -0.004 * chi]), V.element.interpolation_points))
+    u.interpolate(
+        fem.Expression(ufl.as_vector([0.0, 0.0, -0.004 * chi]), V.element.interpolation_points)
+    )
     assert settlement()["settlement_mm"] == pytest.approx(4.0, rel=1e-12)
     # MP compressed axially by 1 mm at the TP edge height: the TP edge moves with it -> no settlement
     z_e = joint.tp_offset

@@ -29,8 +29,9 @@ STEEL = Material()
 @pytest.fixture(scope="module")
 def beam():
     """Cantilever 1.0 x 0.1 x 0.1 m, clamped at x = 0, trilinear hexahedra."""
-    domain = mesh.create_box(MPI.COMM_WORLD, [[0, 0, 0], [1.0, 0.1, 0.1]], [8, 2, 2],
-                             cell_type=mesh.CellType.hexahedron)
+    domain = mesh.create_box(
+        MPI.COMM_WORLD, [[0, 0, 0], [1.0, 0.1, 0.1]], [8, 2, 2], cell_type=mesh.CellType.hexahedron
+    )
     V = fem.functionspace(domain, ("Lagrange", 1, (3,)))
     clamped = fem.locate_dofs_geometrical(V, lambda x: np.isclose(x[0], 0.0))
     bcs = [fem.dirichletbc(np.zeros(3), clamped, V)]
@@ -119,8 +120,11 @@ def test_energy_conserved_over_1000_steps(beam, modes):
     assert kinetic > 0.01 * e0  # the motion did not stop
 
 
-@pytest.mark.parametrize("scheme", [GeneralisedAlpha(), GeneralisedAlpha.from_spectral_radius(0.8)],
-                         ids=["newmark", "generalised-alpha"])
+@pytest.mark.parametrize(
+    "scheme",
+    [GeneralisedAlpha(), GeneralisedAlpha.from_spectral_radius(0.8)],
+    ids=["newmark", "generalised-alpha"],
+)
 def test_second_order_convergence(beam, modes, scheme):
     """Error of the modal-coordinate history vs cos(omega t) over two periods: rate 2."""
     V, M, K, bcs = beam
@@ -129,7 +133,9 @@ def test_second_order_convergence(beam, modes, scheme):
     errors = []
     for n in (16, 32, 64):
         problem = start_in_mode(V, M, K, bcs, phi, scheme)
-        rows = run(problem, 2 * period, period / n, observers=[modal_coordinate(M, phi)], progress=False)
+        rows = run(
+            problem, 2 * period, period / n, observers=[modal_coordinate(M, phi)], progress=False
+        )
         t = np.array([r["time_s"] for r in rows])
         q = np.array([r["q"] for r in rows])
         errors.append(np.max(np.abs(q - np.cos(omega * t))))
@@ -156,13 +162,21 @@ def test_free_decay_gives_prescribed_damping_ratio(beam, modes, kind):
     zeta = 0.01
     damping = {
         "rayleigh-at-frequency": lambda: RayleighDamping.at_frequency(zeta, f1),
-        "rayleigh-two-frequencies": lambda: RayleighDamping.from_two_frequencies(zeta, f1, 0.03, f3),
-        "modal": lambda: ModalDamping(M, [m[1] for m in modes], [m[0] / (2 * np.pi) for m in modes], zeta),
+        "rayleigh-two-frequencies": lambda: RayleighDamping.from_two_frequencies(
+            zeta, f1, 0.03, f3
+        ),
+        "modal": lambda: ModalDamping(
+            M, [m[1] for m in modes], [m[0] / (2 * np.pi) for m in modes], zeta
+        ),
     }[kind]()
     period = 2 * np.pi / omega
     problem = start_in_mode(V, M, K, bcs, phi, GeneralisedAlpha(), damping)
-    rows = run(problem, 6.05 * period, period / 100, observers=[modal_coordinate(M, phi)], progress=False)
-    measured = measured_damping_ratio(np.array([r["time_s"] for r in rows]), np.array([r["q"] for r in rows]))
+    rows = run(
+        problem, 6.05 * period, period / 100, observers=[modal_coordinate(M, phi)], progress=False
+    )
+    measured = measured_damping_ratio(
+        np.array([r["time_s"] for r in rows]), np.array([r["q"] for r in rows])
+    )
     print(f"{kind}: measured zeta = {measured:.5f} (prescribed {zeta})")
     assert measured == pytest.approx(zeta, rel=0.02)
 
@@ -192,7 +206,17 @@ def test_quasi_static_follows_the_load(beam):
     assert residual.norm() < 1e-10 * F.norm()
 
 
-@pytest.mark.parametrize("kwargs", [dict(beta=0.0), dict(beta=1.5), dict(gamma=2.0), dict(gamma=0.4), dict(alpha_f=1.0), dict(alpha_m=-1.5)])
+@pytest.mark.parametrize(
+    "kwargs",
+    [
+        dict(beta=0.0),
+        dict(beta=1.5),
+        dict(gamma=2.0),
+        dict(gamma=0.4),
+        dict(alpha_f=1.0),
+        dict(alpha_m=-1.5),
+    ],
+)
 def test_bad_scheme_parameters_raise(kwargs):
     with pytest.raises(ValueError):
         GeneralisedAlpha(**kwargs)
@@ -216,7 +240,10 @@ def test_generalised_alpha_damps_unresolved_modes(beam, modes, rho_inf):
     omega, phi = modes[2]
     dt = 1000.0 / omega
     ratios = {}
-    for name, scheme in (("newmark", GeneralisedAlpha()), ("alpha", GeneralisedAlpha.from_spectral_radius(rho_inf))):
+    for name, scheme in (
+        ("newmark", GeneralisedAlpha()),
+        ("alpha", GeneralisedAlpha.from_spectral_radius(rho_inf)),
+    ):
         problem = start_in_mode(V, M, K, bcs, phi, scheme)
         energies = []
         for _ in range(40):
@@ -232,7 +259,9 @@ def test_scheme_names():
     from solver.dynamics.schemes import scheme_from_name
 
     assert scheme_from_name("newmark") == GeneralisedAlpha()
-    assert scheme_from_name("generalised-alpha", rho_inf=0.5) == GeneralisedAlpha.from_spectral_radius(0.5)
+    assert scheme_from_name(
+        "generalised-alpha", rho_inf=0.5
+    ) == GeneralisedAlpha.from_spectral_radius(0.5)
     assert not scheme_from_name("quasi-static").dynamic
     with pytest.raises(ValueError, match="unknown time scheme"):
         scheme_from_name("euler")
@@ -251,8 +280,13 @@ def fitted_accuracy(q: np.ndarray, omega_dt: float) -> tuple[float, float]:
     return -np.log(abs(lam)) / phase, omega_dt / phase - 1.0
 
 
-SCHEMES = {"newmark": GeneralisedAlpha(), **{f"generalised-alpha {rho}": GeneralisedAlpha.from_spectral_radius(rho)
-                                             for rho in (0.0, 0.5, 0.8, 1.0)}}
+SCHEMES = {
+    "newmark": GeneralisedAlpha(),
+    **{
+        f"generalised-alpha {rho}": GeneralisedAlpha.from_spectral_radius(rho)
+        for rho in (0.0, 0.5, 0.8, 1.0)
+    },
+}
 
 
 @pytest.mark.parametrize("steps_per_period", [12, 16, 32])
@@ -266,13 +300,17 @@ def test_algorithmic_damping_and_period_error(beam, modes, name, steps_per_perio
     scheme = SCHEMES[name]
     dt = 2 * np.pi / omega / steps_per_period
     problem = start_in_mode(V, M, K, bcs, phi, scheme)
-    rows = run(problem, 8 * steps_per_period * dt, dt, observers=[modal_coordinate(M, phi)], progress=False)
+    rows = run(
+        problem, 8 * steps_per_period * dt, dt, observers=[modal_coordinate(M, phi)], progress=False
+    )
     q = np.array([1.0] + [r["q"] for r in rows])
     damping, period_error = fitted_accuracy(q, omega * dt)
     expected = accuracy(scheme, steps_per_period)
-    print(f"{name}, {steps_per_period} steps per period: damping {100 * damping:.5f} % "
-          f"(closed form {100 * expected.damping_ratio:.5f} %), period error {100 * period_error:.5f} % "
-          f"(closed form {100 * expected.period_error:.5f} %)")
+    print(
+        f"{name}, {steps_per_period} steps per period: damping {100 * damping:.5f} % "
+        f"(closed form {100 * expected.damping_ratio:.5f} %), period error {100 * period_error:.5f} % "
+        f"(closed form {100 * expected.period_error:.5f} %)"
+    )
     assert damping == pytest.approx(expected.damping_ratio, abs=1e-8)
     assert period_error == pytest.approx(expected.period_error, rel=1e-6)
 
@@ -289,7 +327,9 @@ def test_trapezoidal_rule_in_closed_form(steps_per_period):
         assert result.period_error == pytest.approx(0.5 * x / np.arctan(0.5 * x) - 1, rel=1e-10)
         f, dt = 120.0, 1e-3
         w = 2 * np.pi * f
-        assert discrete_frequency(scheme, f, dt) == pytest.approx(2 / dt * np.arctan(0.5 * w * dt) / (2 * np.pi), rel=1e-12)
+        assert discrete_frequency(scheme, f, dt) == pytest.approx(
+            2 / dt * np.arctan(0.5 * w * dt) / (2 * np.pi), rel=1e-12
+        )
 
 
 @pytest.mark.parametrize("rho_inf", [0.0, 0.3, 0.55, 0.8])

@@ -53,18 +53,24 @@ def bar_history(n: int, t_end: float = 3.0) -> dict[str, np.ndarray]:
     M, K = assemble_structure(V, material, bcs)
     wall = mesh.locate_entities_boundary(domain, 0, lambda x: np.isclose(x[0], 0.0))
     tags = mesh.meshtags(domain, 0, wall, np.full(len(wall), 1, dtype=np.int32))
-    contact = RigidPlaneContact(V, tags, 1, material, None, [0, 0, 0], [1, 0, 0], gamma0=1.0, theta=0.0)
+    contact = RigidPlaneContact(
+        V, tags, 1, material, None, [0, 0, 0], [1, 0, 0], gamma0=1.0, theta=0.0
+    )
     problem = Elastodynamics(V, M, K, bcs, contact=contact, newton_options=NEWTON)
     problem.u.interpolate(lambda x: (0.5 - 0.5 * x[0])[None, :])
     problem.initialise(0.0)
     end = PointProbe(problem.u, [[0.0, 0.0, 0.0]])
 
     def observe(p):
-        pressure = domain.comm.allreduce(contact.state.pressure.sum())  # one quadrature point: x = 0
+        pressure = domain.comm.allreduce(
+            contact.state.pressure.sum()
+        )  # one quadrature point: x = 0
         return {"u0_m": end()[0, 0], "pressure_Pa": pressure, "energy_J": sum(p.energy())}
 
     rows = run(problem, t_end, 1.0 / n, observers=[observe], progress=False)  # dt = h (CFL 1)
-    return {k: np.array([r[k] for r in rows]) for k in ("time_s", "u0_m", "pressure_Pa", "energy_J")}
+    return {
+        k: np.array([r[k] for r in rows]) for k in ("time_s", "u0_m", "pressure_Pa", "energy_J")
+    }
 
 
 def impacting_bar(n: int, t_end: float = 3.0):
@@ -97,7 +103,9 @@ def den_hartog(m, k, F0, Ff, omega):
     theta = np.pi * wn / omega
     D = F0 / (k * (1 - (omega / wn) ** 2))
     # x = C1 cos(wn t) + C2 sin(wn t) + D cos(omega t + phi) - Ff/k; x' = 0 at 0 and pi/omega
-    alpha, beta = np.linalg.solve([[0, wn], [-wn * np.sin(theta), wn * np.cos(theta)]], [omega * D, -omega * D])
+    alpha, beta = np.linalg.solve(
+        [[0, wn], [-wn * np.sin(theta), wn * np.cos(theta)]], [omega * D, -omega * D]
+    )
     s = 2 * Ff / k / (alpha * (1 + np.cos(theta)) + beta * np.sin(theta))  # x(pi/omega) = -x(0)
     C1, C2 = alpha * s, beta * s
     for c in (np.sqrt(1 - s * s), -np.sqrt(1 - s * s)):
@@ -120,15 +128,19 @@ STOPS = 0.6  # friction force [N] with which the block, started at rest, stops o
 def test_den_hartog_reference_solves_the_ode():
     """The closed form against scipy's ODE solver over one upward half-period."""
     X0, phi, x = den_hartog(M_BLOCK, K_SPRING, F0, F_FRICTION, OMEGA)
-    rhs = lambda t, y: [y[1], (F0 * np.cos(OMEGA * t + phi) - F_FRICTION - K_SPRING * y[0]) / M_BLOCK]
+
+    def rhs(t, y):
+        return [y[1], (F0 * np.cos(OMEGA * t + phi) - F_FRICTION - K_SPRING * y[0]) / M_BLOCK]
+
     t = np.linspace(0, np.pi / OMEGA, 50)
     sol = solve_ivp(rhs, (0, t[-1]), [-X0, 0.0], t_eval=t, rtol=1e-11, atol=1e-13)
     assert np.max(np.abs(sol.y[0] - x(t))) < 1e-8 * X0
     assert sol.y[0][-1] == pytest.approx(X0, rel=1e-8) and abs(sol.y[1][-1]) < 1e-8
 
 
-def friction_oscillator(periods: float = 2.0, friction_force: float = F_FRICTION,
-                        backtracks: int = 0) -> dict[str, np.ndarray]:
+def friction_oscillator(
+    periods: float = 2.0, friction_force: float = F_FRICTION, backtracks: int = 0
+) -> dict[str, np.ndarray]:
     """Time [s], block displacement x [m] and the number of slipping points per step of the
     friction oscillator with friction force ``friction_force`` [N], 100 steps per period, started on
     Den Hartog's orbit (x = -X0, at rest) where that exists, else at rest at x = 0 with phi = 0
@@ -138,9 +150,13 @@ def friction_oscillator(periods: float = 2.0, friction_force: float = F_FRICTION
     except ValueError:  # motion with stops
         X0, phi = 0.0, 0.0
     a = 0.1  # block side [m]; 2D, per unit thickness
-    domain = mesh.create_rectangle(MPI.COMM_WORLD, [[0, 0], [a, a]], [2, 2], mesh.CellType.quadrilateral)
+    domain = mesh.create_rectangle(
+        MPI.COMM_WORLD, [[0, 0], [a, a]], [2, 2], mesh.CellType.quadrilateral
+    )
     V = fem.functionspace(domain, ("Lagrange", 1, (2,)))
-    material = Material(E=1e8, nu=0.0, rho=M_BLOCK / a**2)  # internal modes ~ kHz: a rigid block at 0.6 Hz
+    material = Material(
+        E=1e8, nu=0.0, rho=M_BLOCK / a**2
+    )  # internal modes ~ kHz: a rigid block at 0.6 Hz
     bottom = mesh.locate_entities_boundary(domain, 1, lambda x: np.isclose(x[1], 0.0))
     top = mesh.locate_entities_boundary(domain, 1, lambda x: np.isclose(x[1], a))
     facets = np.concatenate([bottom, top])
@@ -148,10 +164,14 @@ def friction_oscillator(periods: float = 2.0, friction_force: float = F_FRICTION
     values = np.concatenate([np.full(len(bottom), 1), np.full(len(top), 2)]).astype(np.int32)
     tags = mesh.meshtags(domain, 1, facets[order], values[order])
     w = ufl.TestFunction(V)
-    spring = (K_SPRING / a**2) * ufl.TrialFunction(V)[0] * w[0] * ufl.dx  # spring to ground, total k
+    spring = (
+        (K_SPRING / a**2) * ufl.TrialFunction(V)[0] * w[0] * ufl.dx
+    )  # spring to ground, total k
     M, K = assemble_structure(V, material, [], extra_stiffness=spring)
     friction = FrictionLaw(mu_s=MU, mu_d=MU, d_c=0.0)
-    contact = RigidPlaneContact(V, tags, 1, material, friction, [0, 0, 0], [0, 1, 0], gamma0=10.0, theta=0.0)
+    contact = RigidPlaneContact(
+        V, tags, 1, material, friction, [0, 0, 0], [0, 1, 0], gamma0=10.0, theta=0.0
+    )
     top_load = TopFaceLoad(V, tags, 2)
     drive = assemble_vector(fem.form((1.0 / a**2) * w[0] * ufl.dx))  # unit total horizontal force
     drive.ghostUpdate(addv=PETSc.InsertMode.ADD, mode=PETSc.ScatterMode.REVERSE)
@@ -162,13 +182,29 @@ def friction_oscillator(periods: float = 2.0, friction_force: float = F_FRICTION
         out.axpy(F0 * np.cos(OMEGA * t + phi), drive)
 
     # static pre-load under N, then start on the periodic orbit: x = -X0, at rest
-    static = Elastodynamics(V, M, K, [], scheme=QuasiStatic(), contact=contact,
-                           load=lambda t, out: top_load.add(normal, out), newton_options=NEWTON)
+    static = Elastodynamics(
+        V,
+        M,
+        K,
+        [],
+        scheme=QuasiStatic(),
+        contact=contact,
+        load=lambda t, out: top_load.add(normal, out),
+        newton_options=NEWTON,
+    )
     static.initialise(0.0)
     assert static.step(1.0).converged
     assert contact.normal_force() == pytest.approx(friction_force / MU, rel=1e-6)
-    problem = Elastodynamics(V, M, K, [], scheme=GeneralisedAlpha.from_spectral_radius(0.5),
-                             contact=contact, load=load, newton_options=NEWTON | {"max_backtracks": backtracks})
+    problem = Elastodynamics(
+        V,
+        M,
+        K,
+        [],
+        scheme=GeneralisedAlpha.from_spectral_radius(0.5),
+        contact=contact,
+        load=load,
+        newton_options=NEWTON | {"max_backtracks": backtracks},
+    )
     problem.u.x.array[:] = static.u.x.array
     problem.u.x.array[0::2] -= X0
     problem.initialise(0.0)
@@ -191,8 +227,10 @@ def test_friction_oscillator_matches_den_hartog():
     amplitude = 0.5 * (x[second].max() - x[second].min())
     exact = np.where(np.mod(t, period) < period / 2, 1.0, -1.0) * x_half(np.mod(t, period / 2))
     history_error = np.max(np.abs(x - exact)) / X0
-    print(f"\nfriction oscillator: amplitude {amplitude:.6f} m, Den Hartog {X0:.6f} m "
-          f"({amplitude / X0 - 1:+.2%}); max history error {history_error:.2%} of X0")
+    print(
+        f"\nfriction oscillator: amplitude {amplitude:.6f} m, Den Hartog {X0:.6f} m "
+        f"({amplitude / X0 - 1:+.2%}); max history error {history_error:.2%} of X0"
+    )
     assert amplitude == pytest.approx(X0, rel=0.03)
     assert history_error < 0.03
     assert slipping.sum() > 0  # the block slides (and it is not glued by a wrong friction limit)
@@ -217,8 +255,10 @@ def test_newton_starts_from_u_n_where_stick_and_slip_change(monkeypatch):
     t_u_n = np.array([t for t, first in starts if first])
     sticking = chosen["time_s"][chosen["slipping"] == 0]
     period = 2 * np.pi / OMEGA
-    print(f"\nu_n first at t / period = {np.round(t_u_n / period, 3)}; sticking steps at "
-          f"{np.round(sticking / period, 3)}")
+    print(
+        f"\nu_n first at t / period = {np.round(t_u_n / period, 3)}; sticking steps at "
+        f"{np.round(sticking / period, 3)}"
+    )
     assert sticking.size > 0 and t_u_n.size > 0
     # u_n starts only around the stop (the points' slip restarts over a few steps), none while
     # the block slides on
@@ -231,4 +271,6 @@ def test_newton_starts_from_u_n_where_stick_and_slip_change(monkeypatch):
     monkeypatch.setattr(Elastodynamics, "initial_guesses", predictor_first)
     reference = friction_oscillator(periods=2.0, friction_force=STOPS, backtracks=4)
     assert np.array_equal(chosen["time_s"], reference["time_s"])
-    assert np.max(np.abs(chosen["x_m"] - reference["x_m"])) < 1e-7 * np.max(np.abs(reference["x_m"]))
+    assert np.max(np.abs(chosen["x_m"] - reference["x_m"])) < 1e-7 * np.max(
+        np.abs(reference["x_m"])
+    )

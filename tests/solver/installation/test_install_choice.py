@@ -49,7 +49,9 @@ def test_best_ranks_plus_m2n1_plus_control():
     assert control.frequency_Hz == pytest.approx(np.sqrt(50.0 * 68.0), abs=0.05)
     assert "a factor 1.17 from the nearest natural frequency (50.0 Hz)" in control.reason
     # without a lead-in: the geometric mean of 50 and 86 Hz (a factor 1.311 from both)
-    alone = choose_frequencies(RECORDS, VibrationSettings(n_frequencies=2, max_frequency_hz=300.0, lead_in_hz=()))
+    alone = choose_frequencies(
+        RECORDS, VibrationSettings(n_frequencies=2, max_frequency_hz=300.0, lead_in_hz=())
+    )
     (control,) = [e for e in alone if e.role == "control"]
     assert control.frequency_Hz == pytest.approx(np.sqrt(50.0 * 86.0), abs=0.05)
     assert "a factor 1.31 " in control.reason
@@ -71,7 +73,11 @@ def test_single_frequency_control_stays_below_the_limit():
 def test_pair_partner_is_not_a_second_frequency():
     """The joint's case: one pair partner ranks high, the other (orthogonal to the forcing)
     low; only one of them is excited, and the control is not squeezed between them."""
-    records = [_record(1, 138.27, 1, 0, 8), _record(2, 140.48, 1, 0, 17), _record(3, 337.4, 1, 0, 3)]
+    records = [
+        _record(1, 138.27, 1, 0, 8),
+        _record(2, 140.48, 1, 0, 17),
+        _record(3, 337.4, 1, 0, 3),
+    ]
     chosen = choose_frequencies(
         records, VibrationSettings(n_frequencies=3, lead_in_hz=(), max_frequency_hz=300.0)
     )
@@ -95,16 +101,26 @@ def test_m2n1_mode_is_added_above_the_limit():
     """SPEC 5.4: the lowest (2, 1) mode is excited even above max_frequency_hz (on a coarse,
     stiff mesh it lies far above the ranked modes), unless m2n1_mode is false; the control
     then lies in the octave below the lowest mode, not between the dense higher modes."""
-    records = [_record(1, 142.0, 1, 0, 4), _record(2, 352.0, 1, 0, 1), _record(3, 380.0, 2, 0, 2),
-               _record(4, 487.0, 2, 1, 3), _record(5, 487.1, 2, 1, 5)]
+    records = [
+        _record(1, 142.0, 1, 0, 4),
+        _record(2, 352.0, 1, 0, 1),
+        _record(3, 380.0, 2, 0, 2),
+        _record(4, 487.0, 2, 1, 3),
+        _record(5, 487.1, 2, 1, 5),
+    ]
     chosen = choose_frequencies(
         records, VibrationSettings(n_frequencies=1, lead_in_hz=(), max_frequency_hz=300.0)
     )
     assert [(e.role, e.frequency_Hz) for e in chosen] == [
-        ("control", pytest.approx(71.0)), ("modal", 142.0), ("modal", 487.0)]
+        ("control", pytest.approx(71.0)),
+        ("modal", 142.0),
+        ("modal", 487.0),
+    ]
     assert "above the ranked choice's 300 Hz" in chosen[-1].reason
-    without = choose_frequencies(records, VibrationSettings(
-        n_frequencies=1, lead_in_hz=(), max_frequency_hz=300.0, m2n1_mode=False))
+    without = choose_frequencies(
+        records,
+        VibrationSettings(n_frequencies=1, lead_in_hz=(), max_frequency_hz=300.0, m2n1_mode=False),
+    )
     assert [e.frequency_Hz for e in without if e.role == "modal"] == [142.0]
 
 

@@ -40,8 +40,6 @@ f_r is the best-ranked natural frequency of the settled joint below the case's 3
   beyond the static peak-force settlement (SPEC 5.7 itself is not asserted: it fails here).
 """
 
-
-
 import numpy as np
 import pytest
 from mpi4py import MPI
@@ -72,8 +70,14 @@ def _observe(model, rows: list):
         comm = model.comm
         n_open = comm.allreduce(int(np.count_nonzero(status == Status.OPEN)))
         normal, _ = model.contact.forces()
-        rows.append((problem.t, model.settlement(problem)["settlement_mm"], normal,
-                     n_open / comm.allreduce(len(status))))
+        rows.append(
+            (
+                problem.t,
+                model.settlement(problem)["settlement_mm"],
+                normal,
+                n_open / comm.allreduce(len(status)),
+            )
+        )
         return {}
 
     return observe
@@ -82,8 +86,14 @@ def _observe(model, rows: list):
 def _advance(model, t_end: float, dt: float) -> np.ndarray:
     """Integrate to ``t_end`` [s] with nominal step ``dt`` [s]; the observed rows."""
     rows: list = []
-    run(model.problem, t_end, dt, dt_min=dt * model.case.time.dt_min_fraction,
-        observers=[_observe(model, rows)], progress=False)
+    run(
+        model.problem,
+        t_end,
+        dt,
+        dt_min=dt * model.case.time.dt_min_fraction,
+        observers=[_observe(model, rows)],
+        progress=False,
+    )
     return np.array(rows)
 
 
@@ -117,26 +127,38 @@ def settled(coarse_case, shared_dir):
     sw = case.self_weight
     history = _advance(model, sw.duration_s, sw.dt_s)
     result, _ = settled_modes(model, case.vibration.n_modes)
-    records = describe_modes(result, case.material,
-                             JointParts.for_joint(model.V, model.mesh_data, model.placed),
-                             zeta=case.damping.zeta,
-                             m_max=min(12, (2 * case.mesh.n_circumferential - 1) // 2))
+    records = describe_modes(
+        result,
+        case.material,
+        JointParts.for_joint(model.V, model.mesh_data, model.placed),
+        zeta=case.damping.zeta,
+        m_max=min(12, (2 * case.mesh.n_circumferential - 1) // 2),
+    )
     chosen = choose_frequencies(records, case.vibration)
     f_r = next(e.frequency_Hz for e in sorted(chosen, key=lambda e: e.rank) if e.role == "modal")
     folder = shared_dir("settled")
     checkpoint.save(folder, model.problem, {})
     _, settlement, normal, _ = history[-1]
-    print(f"\nsettled: {settlement:.4f} mm, normal force {normal / 1e3:.2f} kN, "
-          f"natural frequencies [Hz] {np.round(result.frequencies_hz, 2)}, f_r = {f_r:.2f} Hz")
-    return {"model": model, "checkpoint": folder, "f_r": f_r, "settlement_mm": settlement,
-            "normal_N": normal}
+    print(
+        f"\nsettled: {settlement:.4f} mm, normal force {normal / 1e3:.2f} kN, "
+        f"natural frequencies [Hz] {np.round(result.frequencies_hz, 2)}, f_r = {f_r:.2f} Hz"
+    )
+    return {
+        "model": model,
+        "checkpoint": folder,
+        "f_r": f_r,
+        "settlement_mm": settlement,
+        "normal_N": normal,
+    }
 
 
 def test_pull_alone_holds_pull_plus_vibration_at_f_r_separates(settled):
     model, case = settled["model"], settled["model"].case
     s0, n0, amplitude = settled["settlement_mm"], settled["normal_N"], DismountPlan().amplitude_N
     alpha = case.joint.mp.half_angle
-    holds, frees = (pull_out_force(n0, mu, alpha) for mu in (case.friction.mu_d, case.friction.mu_s))
+    holds, frees = (
+        pull_out_force(n0, mu, alpha) for mu in (case.friction.mu_d, case.friction.mu_s)
+    )
     plan = DismountPlan(pull_N=0.5 * (holds + frees - amplitude), amplitude_N=amplitude)
     static = StaticForceSettings((plan.ramp_s,), (plan.pull_N,)).history(case.self_weight)
     _branch(settled, static)
@@ -147,14 +169,21 @@ def test_pull_alone_holds_pull_plus_vibration_at_f_r_separates(settled):
     def separated(rows: np.ndarray) -> bool:
         return rows[-1, 1] < 0.0 and rows[-1, 2] < SEPARATION_FRACTION * n0
 
-    vibrated = _vibrate(model, Stage(DISMOUNT_DURATION_S, settled["f_r"], plan.amplitude_N),
-                        settled["f_r"], chunks=10, stop=separated)
+    vibrated = _vibrate(
+        model,
+        Stage(DISMOUNT_DURATION_S, settled["f_r"], plan.amplitude_N),
+        settled["f_r"],
+        chunks=10,
+        stop=separated,
+    )
     t, s, normal, open_fraction = vibrated[-1]
-    print(f"\ndismount: pull {plan.pull_N / 1e3:.2f} kN (rigid Coulomb pull-out {holds / 1e3:.2f} "
-          f"kN with mu_d, {frees / 1e3:.2f} kN with mu_s): TP up {rise_alone:+.4f} mm, normal "
-          f"force {alone[-1, 2] / 1e3:.2f} kN; + {plan.amplitude_N:.0f} N at {settled['f_r']:.2f} "
-          f"Hz for {t - alone[-1, 0]:.4f} s: TP up {s0 - s:+.4f} mm (settlement {s:+.4f} mm), "
-          f"normal force {normal:.1f} N, {100 * open_fraction:.1f} % of the contact points open")
+    print(
+        f"\ndismount: pull {plan.pull_N / 1e3:.2f} kN (rigid Coulomb pull-out {holds / 1e3:.2f} "
+        f"kN with mu_d, {frees / 1e3:.2f} kN with mu_s): TP up {rise_alone:+.4f} mm, normal "
+        f"force {alone[-1, 2] / 1e3:.2f} kN; + {plan.amplitude_N:.0f} N at {settled['f_r']:.2f} "
+        f"Hz for {t - alone[-1, 0]:.4f} s: TP up {s0 - s:+.4f} mm (settlement {s:+.4f} mm), "
+        f"normal force {normal:.1f} N, {100 * open_fraction:.1f} % of the contact points open"
+    )
     assert plan.pull_N < holds and plan.pull_N + plan.amplitude_N > frees
     assert rise_alone < 1.0  # mm
     assert alone[-1, 2] > 0.5 * n0  # the contact is still closed
@@ -179,16 +208,23 @@ def sweep(settled):
     gains = {"preload": pre[-1, 1] - settled["settlement_mm"]}
     for name, stage, f_max in (
         ("dwell", Stage(SWEEP_DURATION_S, f_r, amplitude), f_r),
-        ("ramp", frequency_ramp(SWEEP_SPAN[0] * f_r, SWEEP_SPAN[1] * f_r, SWEEP_DURATION_S,
-                                amplitude)[0], SWEEP_SPAN[1] * f_r),
+        (
+            "ramp",
+            frequency_ramp(SWEEP_SPAN[0] * f_r, SWEEP_SPAN[1] * f_r, SWEEP_DURATION_S, amplitude)[
+                0
+            ],
+            SWEEP_SPAN[1] * f_r,
+        ),
     ):
         checkpoint.restore(folder, model.problem)
         model.problem.reset_operator()
         gains[name] = _vibrate(model, stage, f_max)[-1, 1] - pre[-1, 1]
-    print(f"\nsweep: static preload to {-peak / 1e3:.1f} kN settled {gains['preload']:+.4f} mm; "
-          f"then {SWEEP_DURATION_S} s at {amplitude:.0f} N: dwell at {f_r:.2f} Hz "
-          f"{gains['dwell']:+.5f} mm, ramp {SWEEP_SPAN[0] * f_r:.1f} -> {SWEEP_SPAN[1] * f_r:.1f} Hz "
-          f"{gains['ramp']:+.5f} mm (ramp / dwell {gains['ramp'] / gains['dwell']:.2f})")
+    print(
+        f"\nsweep: static preload to {-peak / 1e3:.1f} kN settled {gains['preload']:+.4f} mm; "
+        f"then {SWEEP_DURATION_S} s at {amplitude:.0f} N: dwell at {f_r:.2f} Hz "
+        f"{gains['dwell']:+.5f} mm, ramp {SWEEP_SPAN[0] * f_r:.1f} -> {SWEEP_SPAN[1] * f_r:.1f} Hz "
+        f"{gains['ramp']:+.5f} mm (ramp / dwell {gains['ramp'] / gains['dwell']:.2f})"
+    )
     return gains
 
 

@@ -21,7 +21,11 @@ def test_presets_are_valid_installation_cases():
     assert case.damping.model == "rayleigh" and case.self_weight.force_N == -10e3
     assert InstallationCase.from_dict(read_case("full_scale")).self_weight.force_N < 0
     for name in presets():  # the imperfection demo's lead-in schedule is its own
-        schedule = ["schedule=[{duration_s = 0.01, frequency_hz = 68.0}]"] if "imperfections" in name else []
+        schedule = (
+            ["schedule=[{duration_s = 0.01, frequency_hz = 68.0}]"]
+            if "imperfections" in name
+            else []
+        )
         assert InstallationCase.from_dict(read_case(name, schedule)).self_weight.force_N < 0, name
 
 
@@ -144,13 +148,27 @@ def test_resume_needs_a_complete_checkpoint(shared_tmp):
         (folder / checkpoint.MANIFEST).write_text(json.dumps({"ranks": comm.size, "time_s": 0.1}))
     comm.barrier()
     state = np.zeros(6)
-    np.savez(folder / f"rank{comm.rank}.npz", u=state, v=state, a=state, r_contact_old=state,
-             slip_velocity=np.zeros((2, 3)), paired_facet=np.zeros(2, dtype=int))
+    np.savez(
+        folder / f"rank{comm.rank}.npz",
+        u=state,
+        v=state,
+        a=state,
+        r_contact_old=state,
+        slip_velocity=np.zeros((2, 3)),
+        paired_facet=np.zeros(2, dtype=int),
+    )
     comm.barrier()
-    expected = {"u": state, "v": state, "a": state, "r_contact_old": state,
-                "slip_velocity": np.zeros((2, 3)), "paired_facet": np.zeros(2, dtype=int),
-                "paired_coordinates": np.zeros((2, 2))}
-    problem = SimpleNamespace(V=SimpleNamespace(mesh=SimpleNamespace(comm=comm)),
-                              state_arrays=lambda: expected)
+    expected = {
+        "u": state,
+        "v": state,
+        "a": state,
+        "r_contact_old": state,
+        "slip_velocity": np.zeros((2, 3)),
+        "paired_facet": np.zeros(2, dtype=int),
+        "paired_coordinates": np.zeros((2, 2)),
+    }
+    problem = SimpleNamespace(
+        V=SimpleNamespace(mesh=SimpleNamespace(comm=comm)), state_arrays=lambda: expected
+    )
     with pytest.raises(ValueError, match="lacks paired_coordinates.*without --resume"):
         checkpoint.restore(folder, problem)

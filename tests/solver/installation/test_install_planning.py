@@ -28,7 +28,9 @@ ZETA = DampingSettings()  # 1 % at 120 Hz
 
 def test_scheme_check_refuses_numerical_damping_of_resonance():
     # generalised-alpha rho_inf = 0 at 16 steps per period: 2.0 % of critical, twice the physical 1 %
-    with pytest.raises(ValueError, match=r"2 % of critical.*rho_inf >= 0\.\d+.*steps_per_period >= \d+"):
+    with pytest.raises(
+        ValueError, match=r"2 % of critical.*rho_inf >= 0\.\d+.*steps_per_period >= \d+"
+    ):
         check_time_scheme(TimeSettings(rho_inf=0.0, steps_per_period=16), ZETA)
     with pytest.raises(ValueError, match="no inertia"):
         check_time_scheme(TimeSettings(scheme="quasi-static"), ZETA)
@@ -62,22 +64,31 @@ def excitation(frequency_Hz: float, mode: int) -> Excitation:
 def test_modal_stage_is_driven_at_the_discrete_natural_frequency():
     scheme = GeneralisedAlpha.from_spectral_radius(0.7)
     duration, steps = 0.1, 16
-    modal, control = compensate([excitation(327.3, 7), excitation(76.0, 0)], [duration, duration], scheme, steps)
+    modal, control = compensate(
+        [excitation(327.3, 7), excitation(76.0, 0)], [duration, duration], scheme, steps
+    )
     assert control.drive_Hz == 76.0
     f_c = modal.forcing_Hz
     dt = stage_step(duration, f_c, steps)
     # a fixed point: at the step of the forcing frequency, the mode's discrete frequency is f_c
     assert discrete_frequency(scheme, 327.3, dt) == pytest.approx(f_c, rel=1e-10)
     # below f_n by the period error there (the discrete oscillator's period is longer)
-    assert f_c == pytest.approx(327.3 / (1 + accuracy(scheme, 1 / (327.3 * dt)).period_error), rel=1e-9)
+    assert f_c == pytest.approx(
+        327.3 / (1 + accuracy(scheme, 1 / (327.3 * dt)).period_error), rel=1e-9
+    )
     assert f_c < 327.3
 
 
 def test_stage_plans_carry_the_accuracy_at_their_frequency():
     scheme = GeneralisedAlpha.from_spectral_radius(0.7)
     stages = [Stage(0.1, 68.0, 1000.0), Stage(0.05, 322.0, 3600.0)]
-    plans = plan_vibration(Schedule(stages, start_s=2.1), scheme, 16, lambda f: 0.01,
-                           [excitation(68.0, 0), excitation(327.3, 7)])
+    plans = plan_vibration(
+        Schedule(stages, start_s=2.1),
+        scheme,
+        16,
+        lambda f: 0.01,
+        [excitation(68.0, 0), excitation(327.3, 7)],
+    )
     for plan, stage in zip(plans, stages):
         dt = stage_step(stage.duration_s, stage.frequency_hz, 16)
         assert plan.dt_s == pytest.approx(dt)

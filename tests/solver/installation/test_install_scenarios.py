@@ -73,8 +73,10 @@ def test_stick_slip_settlement_under_slowly_increasing_load(reference):
     events = stick_slip_events(t, s, 0.0, 0.0, 1, slip_rate_mm_s=1.0)
     rate = np.diff(np.r_[0.0, s]) / np.diff(np.r_[0.0, t])
     at_rest = np.mean(np.abs(rate[t > 0.2]) < 0.1)  # mm/s, after the landing
-    print(f"\nself-weight: settlement {s[-1]:.3f} mm, {events} stick-slip events, "
-          f"at rest {100 * at_rest:.0f} % of the steps after 0.2 s")
+    print(
+        f"\nself-weight: settlement {s[-1]:.3f} mm, {events} stick-slip events, "
+        f"at rest {100 * at_rest:.0f} % of the steps after 0.2 s"
+    )
     assert s[-1] > 0.5  # mm: the 10 kN push settles the TP
     assert events >= 3
     assert at_rest > 0.2
@@ -88,7 +90,9 @@ def test_lower_friction_settles_more(reference):
     low, _ = _self_weight(LOW_FRICTION, end=0.25)
     t, s_low = low[-1]
     s_ref = np.interp(t, *history.T)
-    print(f"\nsettlement at {t:.2f} s (2.5 kN): mu 0.5/0.4 {s_ref:.3f} mm, mu 0.0625/0.05 {s_low:.3f} mm")
+    print(
+        f"\nsettlement at {t:.2f} s (2.5 kN): mu 0.5/0.4 {s_ref:.3f} mm, mu 0.0625/0.05 {s_low:.3f} mm"
+    )
     assert t == pytest.approx(0.25)
     assert s_low > 2.0 * s_ref > 0
 

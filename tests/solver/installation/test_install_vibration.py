@@ -80,8 +80,7 @@ import numpy as np
 import pytest
 from mpi4py import MPI
 
-from benchmarks.scenarios import (SettledJoint, gain, harmonic_stage, late_gain, settle,
-                                  stabilised)
+from benchmarks.scenarios import SettledJoint, gain, harmonic_stage, late_gain, settle, stabilised
 from solver.contact import NitscheContact, Status
 from solver.installation import checkpoint
 
@@ -143,11 +142,15 @@ def run_scenario(folder: str, overrides: list[str], names: str) -> Scenario:
     settled = model.settlement(model.problem)["settlement_mm"]
     slip = {"lead-in": InterfaceSlip(model.contact)}
     # whole periods: the force is zero where every branch starts (at phase 0)
-    lead = harmonic_stage(model, joint.f_c, AMPLITUDE, round(LEAD_IN * joint.f_c) / joint.f_c,
-                          [slip["lead-in"]])
+    lead = harmonic_stage(
+        model, joint.f_c, AMPLITUDE, round(LEAD_IN * joint.f_c) / joint.f_c, [slip["lead-in"]]
+    )
     checkpoint.save(folder, model.problem, {})
-    stages = {"a": (joint.f_r, AMPLITUDE), "b": (joint.f_c, AMPLITUDE),
-              "c": (joint.f_c, 2 * AMPLITUDE)}
+    stages = {
+        "a": (joint.f_r, AMPLITUDE),
+        "b": (joint.f_c, AMPLITUDE),
+        "c": (joint.f_c, 2 * AMPLITUDE),
+    }
     branches = {}
     for name in names:
         checkpoint.restore(folder, model.problem)
@@ -155,11 +158,15 @@ def run_scenario(folder: str, overrides: list[str], names: str) -> Scenario:
         slip[name] = InterfaceSlip(model.contact)
         branches[name] = harmonic_stage(model, *stages[name], BRANCH, [slip[name]])
     if comm.rank == 0:
-        print(f"\nd_c = {model.case.friction.d_c:g} s/m: self-weight {settled:.5f} mm; f_r = "
-              f"{joint.f_r:.2f} Hz, f_c = {joint.f_c:.2f} Hz")
+        print(
+            f"\nd_c = {model.case.friction.d_c:g} s/m: self-weight {settled:.5f} mm; f_r = "
+            f"{joint.f_r:.2f} Hz, f_c = {joint.f_c:.2f} Hz"
+        )
         for name, h in {"lead-in": lead, **branches}.items():
-            print(f"{name}: +{gain(h):.5f} mm (last 20 % +{late_gain(h):.5f} mm); slipping points: "
-                  f"|v| {1e3 * slip[name].speed:.2f} mm/s, mu {slip[name].mu:.4f}")
+            print(
+                f"{name}: +{gain(h):.5f} mm (last 20 % +{late_gain(h):.5f} mm); slipping points: "
+                f"|v| {1e3 * slip[name].speed:.2f} mm/s, mu {slip[name].mu:.4f}"
+            )
     return Scenario(joint, settled, lead, branches, slip)
 
 
@@ -186,8 +193,10 @@ def test_frequency_driven_settlement_at_a_natural_frequency(scenario):
     ranked natural frequency settles at least 5 times more than the control frequency."""
     joint, branches = scenario.joint, scenario.branches
     a, b = gain(branches["a"]), gain(branches["b"])
-    print(f"\nfrequency-driven: (a) {joint.f_r:.2f} Hz +{a:.5f} mm, (b) {joint.f_c:.2f} Hz "
-          f"+{b:.5f} mm: ratio {selectivity(scenario):.1f}")
+    print(
+        f"\nfrequency-driven: (a) {joint.f_r:.2f} Hz +{a:.5f} mm, (b) {joint.f_c:.2f} Hz "
+        f"+{b:.5f} mm: ratio {selectivity(scenario):.1f}"
+    )
     assert a > 0 and a >= SELECTIVE * max(b, 0.0)
 
 
@@ -202,10 +211,14 @@ def test_amplitude_driven_settlement_stabilises(scenario):
     """SPEC 5.2: the lead-in and branch (c) stop at an equilibrium depth (last 20 % of the stage
     < 5 % of its gain); branch (a)'s share is printed (see the module docstring)."""
     lead, branches = scenario.lead, scenario.branches
-    shares = {name: late_gain(h) / gain(h) for name, h in (("lead-in", lead), ("c", branches["c"]),
-                                                           ("a", branches["a"]))}
-    print("\nlast 20 % of the stage / gain: "
-          + ", ".join(f"{k} {100 * v:.1f} %" for k, v in shares.items()))
+    shares = {
+        name: late_gain(h) / gain(h)
+        for name, h in (("lead-in", lead), ("c", branches["c"]), ("a", branches["a"]))
+    }
+    print(
+        "\nlast 20 % of the stage / gain: "
+        + ", ".join(f"{k} {100 * v:.1f} %" for k, v in shares.items())
+    )
     assert stabilised(lead)
     assert stabilised(branches["c"])
 
@@ -220,19 +233,25 @@ def test_slow_friction_decay_loses_selectivity(scenario, slow_decay):
     ratios = {fast.d_c: selectivity(scenario), slow.d_c: selectivity(slow_decay)}
     lines = []
     for d_c, s in ((fast.d_c, scenario), (slow.d_c, slow_decay)):
-        slip = ", ".join(f"{k} {s.slip[k].mu:.3f} ({1e3 * s.slip[k].speed:.1f} mm/s)"
-                         for k in ("lead-in", "a", "b"))
-        lines.append(f"d_c = {d_c:g} s/m: (a) +{gain(s.branches['a']):.5f} mm, (b) "
-                     f"+{gain(s.branches['b']):.5f} mm, a/b {ratios[d_c]:.1f}; mu of the "
-                     f"slipping points (|v|): {slip}")
+        slip = ", ".join(
+            f"{k} {s.slip[k].mu:.3f} ({1e3 * s.slip[k].speed:.1f} mm/s)"
+            for k in ("lead-in", "a", "b")
+        )
+        lines.append(
+            f"d_c = {d_c:g} s/m: (a) +{gain(s.branches['a']):.5f} mm, (b) "
+            f"+{gain(s.branches['b']):.5f} mm, a/b {ratios[d_c]:.1f}; mu of the "
+            f"slipping points (|v|): {slip}"
+        )
     print("\nslow friction decay:\n" + "\n".join(lines))
     assert gain(scenario.branches["a"]) > 0 and ratios[fast.d_c] >= SELECTIVE
     if ratios[slow.d_c] >= SELECTIVE:
-        pytest.xfail(f"d_c = {slow.d_c:g} s/m keeps the frequency selectivity (a/b "
-                     f"{ratios[slow.d_c]:.1f} >= {SELECTIVE:g}; {ratios[fast.d_c]:.1f} at d_c = "
-                     f"{fast.d_c:g} s/m). With d_c = 1 mu(|v|) stays within 1 % of mu_s "
-                     "below 10 mm/s (1/d_c = 1 m/s): Coulomb friction at mu_s, no velocity "
-                     "weakening at any frequency. The branches slip slowly, so even d_c = 100 "
-                     "gives mu near mu_s there; d_c acts through the lead-in's slide (less "
-                     "settlement, (b) creeping on) and the resonance of (a) still dominates; "
-                     + "; ".join(lines))
+        pytest.xfail(
+            f"d_c = {slow.d_c:g} s/m keeps the frequency selectivity (a/b "
+            f"{ratios[slow.d_c]:.1f} >= {SELECTIVE:g}; {ratios[fast.d_c]:.1f} at d_c = "
+            f"{fast.d_c:g} s/m). With d_c = 1 mu(|v|) stays within 1 % of mu_s "
+            "below 10 mm/s (1/d_c = 1 m/s): Coulomb friction at mu_s, no velocity "
+            "weakening at any frequency. The branches slip slowly, so even d_c = 100 "
+            "gives mu near mu_s there; d_c acts through the lead-in's slide (less "
+            "settlement, (b) creeping on) and the resonance of (a) still dominates; "
+            + "; ".join(lines)
+        )
