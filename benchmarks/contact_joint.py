@@ -105,7 +105,7 @@ def main(argv=None) -> int:
         f"{V.dofmap.index_map.size_global * 3} dofs, {comm.size} rank(s), built in {t:.1f} s"
     )
 
-    friction = FrictionLaw()  # SPEC 4 reference: mu_s = 0.5, mu_d = 0.4, d_c = 100 s/m
+    friction = FrictionLaw()  # docs/physics.md §4 reference: mu_s = 0.5, mu_d = 0.4, d_c = 100 s/m
     contact, t = timed(
         comm,
         lambda: NitscheContact(

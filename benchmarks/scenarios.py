@@ -1,4 +1,4 @@
-"""SPEC 5 vibration scenarios on the joint: frequency- against amplitude-driven settlement.
+"""docs/physics.md §5 vibration scenarios on the joint: frequency- against amplitude-driven settlement.
 
 From one settled state the run branches (state saved with solver.installation.checkpoint):
 
@@ -8,7 +8,7 @@ From one settled state the run branches (state saved with solver.installation.ch
    frequency f_r, non-modal control f_c);
 2. lead-in: ``--lead-in`` s (rounded to whole periods) at f_c with the amplitude A
    (``--amplitude``): the quasi-static settlement that a force of amplitude A causes at any
-   frequency (SPEC 3 runs 68 and 100 Hz first for this reason). It must outlast the free
+   frequency (docs/physics.md §3 runs 68 and 100 Hz first for this reason). It must outlast the free
    vibration that switching the force on excites (decay time 1/(zeta omega) of the lowest
    mode, with the scheme's numerical damping about 0.04 s at 142 Hz): after it the joint
    holds A, so A lies below the off-resonance threshold of the next stages;
@@ -16,14 +16,14 @@ From one settled state the run branches (state saved with solver.installation.ch
    (a) f_r at A, (b) f_c at A, (c) f_c at ``--factor`` x A.
 
 Printed and written to ``--output``/scenarios.csv (units in the header): the settlement
-gained in each branch [mm] and the SPEC 5 criteria: frequency-driven (a) >= 5 (b)
-(SPEC 5.2), amplitude-driven (c) > 5 (b) (5.3), stabilisation of each event: the last 20 %
+gained in each branch [mm] and the docs/physics.md §5 criteria: frequency-driven (a) >= 5 (b)
+(docs/physics.md §5.2), amplitude-driven (c) > 5 (b) (5.3), stabilisation of each event: the last 20 %
 of a stage adds less than 5 % of its gain (5.2).
 
     mpirun -n 2 python benchmarks/scenarios.py                       # cases/coarse.toml (as demos/install.py)
     python benchmarks/scenarios.py --set mesh.n_circumferential=16 --duration 0.1
 
-The functions are shared with tests/test_install_vibration.py.
+The functions are shared with tests/solver/installation/test_install_vibration.py.
 """
 
 import argparse
@@ -123,7 +123,7 @@ def late_gain(history: np.ndarray, fraction: float = report.LATE) -> float:
 
 
 def stabilised(history: np.ndarray) -> bool:
-    """SPEC 5.2: the stage settled, and its last 20 % added less than 5 % of its gain."""
+    """docs/physics.md §5.2: the stage settled, and its last 20 % added less than 5 % of its gain."""
     return report.stabilised(gain(history), late_gain(history))
 
 

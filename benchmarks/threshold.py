@@ -1,6 +1,6 @@
-"""Off-resonance threshold (SPEC 5.3) at the control frequency: amplitude steps after a lead-in.
+"""Off-resonance threshold (docs/physics.md §5.3) at the control frequency: amplitude steps after a lead-in.
 
-The joint, self-weight stage and durations of tests/test_install_vibration.py (1 s ramp, 0.1 s
+The joint, self-weight stage and durations of tests/solver/installation/test_install_vibration.py (1 s ramp, 0.1 s
 lead-in, 0.05 s branches) and the frequencies of benchmarks/scenarios.py (``settle``: modal
 stage, the best-ranked natural frequency f_r and the non-modal control f_c as the installation
 run chooses them), then a lead-in of ``--lead-in`` s at (f_c, A) that brings the joint to the
@@ -10,8 +10,8 @@ depth at which it holds A. From that state (solver.installation.checkpoint) one 
 Per branch: the settlement gained [mm], over the stage's second half [mm] (the sustained part,
 as in the installation summary), and whether the event stabilised (solver.post.report.stabilised:
 the last 20 % adds < 5 % of the gain). A branch is amplitude-driven when it gains more than 5
-times the branch at k = 1 (the scenario tests' SPEC 5.3 criterion); the threshold lies between
-the largest factor below the first amplitude-driven branch and that branch's factor. SPEC 5.2
+times the branch at k = 1 (the scenario tests' docs/physics.md §5.3 criterion); the threshold lies between
+the largest factor below the first amplitude-driven branch and that branch's factor. docs/physics.md §5.2
 adds that, below the threshold, a larger amplitude at a non-effective frequency gives no
 additional settlement: the branches between k = 1 and the threshold show whether it does.
 
@@ -36,7 +36,7 @@ from solver.installation import checkpoint
 from solver.post import report
 
 AMPLITUDE_DRIVEN = 5.0  #: a branch gaining more than this x the gain at A is amplitude-driven [-]
-#: the self-weight stage of the scenario tests (tests/test_install_vibration.py): 1 s ramp
+#: the self-weight stage of the scenario tests (tests/solver/installation/test_install_vibration.py): 1 s ramp
 
 
 def main(argv=None) -> int:

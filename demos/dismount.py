@@ -1,4 +1,4 @@
-"""Dismount of the installed slip-joint (SPEC 3, 5.5; docs/install.md "Dismount").
+"""Dismount of the installed slip-joint (docs/physics.md §3, 5.5; docs/install.md "Dismount").
 
 From the installed state (self-weight stage, optionally --install-stages stages of vibration at
 the ranked natural frequencies), the axial force on the TP top is ramped from the self-weight
@@ -14,7 +14,7 @@ default run, 8 around, 0.25 m, with the contact settings with which the friction
 solve converges; ranked frequencies up to 700 Hz), short stages. After the self-weight stage
 alone this joint is held by a contact normal force of
 about 19 kN, so its rigid Coulomb pull-out force N (mu cos(alpha) - sin(alpha)) is 7.4-9.4 kN
-(printed): the default pull of 6 kN lies below it, a pull in SPEC 3's rig range (10-40 kN,
+(printed): the default pull of 6 kN lies below it, a pull in docs/physics.md §3's rig range (10-40 kN,
 e.g. --pull 20e3) frees this joint without vibration. --quick: --case dismount_quick (the tiny
 joint with the landing contact settings) and very short stages (a smoke run: the TP is still
 sliding at the end of its 12 ms self-weight ramp, so little normal force has built up and the
@@ -54,7 +54,7 @@ def main(argv: list[str] | None = None) -> int:
         "--pull",
         type=float,
         default=6e3,
-        help="upward pulling force [N] (6 kN; SPEC 3 rig: 10-40 kN)",
+        help="upward pulling force [N] (6 kN; docs/physics.md §3 rig: 10-40 kN)",
     )
     p.add_argument(
         "--pull-ramp", type=float, help="ramp from the self-weight force to the pull [s] (0.05)"

@@ -1,4 +1,4 @@
-"""Imperfect cones (SPEC 6; docs/install.md "Imperfect cones"): rigid contact map and an
+"""Imperfect cones (docs/physics.md §6; docs/install.md "Imperfect cones"): rigid contact map and an
 installation run of a TP with a measured (or synthetic) imperfection map.
 
 The TP's inner surface comes from --scan FILE (raw laser ring scans ``z_m, loop, angle_deg,
@@ -7,13 +7,13 @@ distance_m`` or a processed map ``z_m, angle_deg, radial_deviation_m``, read by
 --scan the demo first writes a synthetic raw scan file, synthetic_scan_tp.csv, into the output
 folder: an m = 2 ovality (--ovality-mm, default 0.3 mm), an m = 3 term, a weld seam bump at
 75 deg, stations every 20 mm, each ring scanned 370 deg forward and back with a lagging
-backward loop, junk at the turn-around and a random arm rotation per station, as the SPEC 6
+backward loop, junk at the turn-around and a random arm rotation per station, as the docs/physics.md §6
 rig records them. --mp-ovality-mm adds an m = 2 ovality to the MP.
 
 Outputs in --output: the processed TP map (tp_deviation_map.csv, tp_deviation.png), the rigid
 contact map of the imperfect and of the perfect cones (contact_map.png, contact_map_perfect.png,
 contact_fraction.csv), and the installation run of the imperfect joint (placed at its own first
-contact): self-weight, then the SPEC 3 lead-in stages 68 Hz and 100 Hz at the eccentric
+contact): self-weight, then the docs/physics.md §3 lead-in stages 68 Hz and 100 Hz at the eccentric
 amplitude (history.csv, stages.csv, contact_status_<k>.png, summary.txt, ...). --no-run: only the
 maps. The modal stage is off by default (--modal turns it on): while the imperfect TP rests on a
 few points it is a mechanism with zero-frequency modes, on which the mode ranking fails.
@@ -43,7 +43,7 @@ from solver.installation import cli
 
 DEFAULT_CASE = "imperfections"
 QUICK_CASE = "imperfections_quick"
-#: the run after self-weight: the SPEC 3 lead-in stages at the eccentric amplitude
+#: the run after self-weight: the docs/physics.md §3 lead-in stages at the eccentric amplitude
 LEAD_IN_HZ = (68.0, 100.0)
 
 

@@ -1,4 +1,4 @@
-"""Vibration-assisted installation of the scaled slip-joint (SPEC 3, 5; docs/install.md).
+"""Vibration-assisted installation of the scaled slip-joint (docs/physics.md §3, 5; docs/install.md).
 
 Stages: self-weight (10 kN ramped over 2 s, stick-slip settlement), modal analysis of the
 settled joint with the contact tangent and a ranked choice of excitation frequencies,

@@ -50,7 +50,7 @@ def summary(joint: JointGeometry, material: Material) -> list[str]:
     lines += [
         f"first contact: TP lower edge at z = {z_fc:.2f} mm (MP bottom at 0), "
         f"overlap {overlap:.2f} mm",
-        f"required slip to full contact (SPEC 2.2): {slip:.2f} mm (overlap then {full:.2f} mm)",
+        f"required slip to full contact (docs/physics.md §2.2): {slip:.2f} mm (overlap then {full:.2f} mm)",
     ]
     return lines
 

@@ -1,4 +1,4 @@
-"""Reduced (lumped-element) model of the full-scale slip-joint installation (SPEC 7).
+"""Reduced (lumped-element) model of the full-scale slip-joint installation (docs/physics.md §7).
 
 Prints the shell-theory springs (full scale and 1:10), the self-weight settlement of
 the five sensitivity cases, the settlement after a 10 cm drop, and maps the
@@ -30,7 +30,7 @@ from solver.post.csv import write_csv
 from solver.reduced.lumped import GRAVITY, AxialLoad, LumpedModel, simulate
 from solver.reduced.shell import JointStiffness, joint_stiffness
 
-#: SPEC 7 sensitivity cases: (alpha [deg], beta [deg], mu_d)
+#: docs/physics.md §7 sensitivity cases: (alpha [deg], beta [deg], mu_d)
 SENSITIVITY_CASES = (
     (1.05, 1.0, 0.3),
     (1.05, 1.0, 0.4),
@@ -59,7 +59,7 @@ def parse_args(argv: list[str] | None) -> argparse.Namespace:
         "--d-c",
         type=float,
         default=math.inf,
-        help="friction decay [s/m] of mu(v) (inf: step from mu_s to mu_d, SPEC 7)",
+        help="friction decay [s/m] of mu(v) (inf: step from mu_s to mu_d, docs/physics.md §7)",
     )
     p.add_argument("--damping-ratio", type=float, default=0.01, help="fraction of critical per dof")
     p.add_argument(
@@ -98,7 +98,7 @@ def with_angles(joint: JointGeometry, alpha_deg: float, beta_deg: float) -> Join
 
 
 def required_slip(joint: JointGeometry, alpha_deg: float, beta_deg: float) -> float:
-    """SPEC 2.2: L_slip = L_overlap (1 - sin beta / sin alpha) [m], with the design overlap
+    """docs/physics.md §2.2: L_slip = L_overlap (1 - sin beta / sin alpha) [m], with the design overlap
     L_overlap of the case file's joint (its overlap at full contact, 1.5 D at full scale)."""
     ratio = math.sin(math.radians(beta_deg)) / math.sin(math.radians(alpha_deg))
     return joint.full_contact_overlap * (1.0 - ratio)

@@ -1,4 +1,4 @@
-"""One-at-a-time parameter study of the installation (SPEC 4, 5.6; docs/install.md "Parameter
+"""One-at-a-time parameter study of the installation (docs/physics.md §4, 5.6; docs/install.md "Parameter
 study").
 
 From a base case (reference friction mu_s/mu_d = 0.5/0.4, d_c = 100 s/m, Rayleigh damping),

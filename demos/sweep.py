@@ -1,10 +1,10 @@
-"""Frequency sweeps of the installed slip-joint (SPEC 3, 5.7; docs/install.md "Sweeps").
+"""Frequency sweeps of the installed slip-joint (docs/physics.md §3, 5.7; docs/install.md "Sweeps").
 
 After the self-weight stage (and the modal stage, whose natural frequencies are marked on the
 plots), either (a) a step-wise frequency increase, --sweep steps: --f-start to --f-stop in
---f-step steps of --dwell seconds each (SPEC 3: 10 -> 130 Hz in 10 Hz steps of 0.5 s), or
+--f-step steps of --dwell seconds each (docs/physics.md §3: 10 -> 130 Hz in 10 Hz steps of 0.5 s), or
 (b) a slow linear frequency ramp, --sweep ramp: --f-start to --f-stop over --ramp-duration
-seconds (SPEC 3: 0 -> 125 Hz over 13-200 s); the force amplitude is the eccentric-motor law
+seconds (docs/physics.md §3: 0 -> 125 Hz over 13-200 s); the force amplitude is the eccentric-motor law
 0.3632 f^2 N (--amplitude eccentric, default) or a fixed force [N]. A [[schedule]] in the case
 file is replaced by the sweep.
 
@@ -13,7 +13,7 @@ settlement_gain_mm), sweep.png (settlement gained against time and against frequ
 the installation outputs (history.csv, stages.csv with the gain per step, modes.csv, ...).
 
 Without options: cases/sweep.toml (the coarse frictional joint of the demos/install.py default
-run, 20 modes) and steps of 0.03 s (the SPEC's 0.5 s steps: --dwell 0.5, about 16 x longer).
+run, 20 modes) and steps of 0.03 s (the published tests' 0.5 s steps: --dwell 0.5, about 16 x longer).
 --quick: --case quick (the demos' smoke-run joint) and three 2 ms steps (not physics).
 
 Usage: mpirun -n 2 python demos/sweep.py [--sweep steps|ramp] [--f-start HZ] [--f-stop HZ]
@@ -79,8 +79,14 @@ def main(argv: list[str] | None = None) -> int:
     p.add_argument("--f-start", type=float, help="first frequency [Hz] (steps 10, ramp 0)")
     p.add_argument("--f-stop", type=float, help="last frequency [Hz] (steps 130, ramp 125)")
     p.add_argument("--f-step", type=float, help="steps: frequency step [Hz] (10)")
-    p.add_argument("--dwell", type=float, help="steps: duration of each step [s] (0.03; SPEC 0.5)")
-    p.add_argument("--ramp-duration", type=float, help="ramp: duration [s] (1; SPEC 13-200)")
+    p.add_argument(
+        "--dwell",
+        type=float,
+        help="steps: duration of each step [s] (0.03; the published tests: 0.5)",
+    )
+    p.add_argument(
+        "--ramp-duration", type=float, help="ramp: duration [s] (1; the published tests: 13-200)"
+    )
     p.add_argument(
         "--amplitude", default="eccentric", help="'eccentric' (0.3632 f^2 N) or a force [N]"
     )

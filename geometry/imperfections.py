@@ -1,4 +1,4 @@
-"""Measured radial imperfections of a part's wall (SPEC 6).
+"""Measured radial imperfections of a part's wall (docs/physics.md §6).
 
 A :class:`DeviationMap` gives the radial deviation dr [m] of a part's wall from
 its nominal radius as a function of the angle theta and the part-local height z
@@ -16,7 +16,7 @@ Two file formats (CSV with a header line; ``#`` starts a comment line):
     is ``forward`` or ``backward``; ``distance_m`` is the measured radius of the
     part's inner surface (distance from the arm's rotation axis, on the part's
     axis, to the wall). At each station the arm
-    turns 370 deg forward and back. Processing (SPEC 6): (1) shift the backward
+    turns 370 deg forward and back. Processing (docs/physics.md §6): (1) shift the backward
     loop onto the forward loop (best circular match; its readings at 360-370 deg,
     where the sensor dwells at the turn-around, are dropped); (2) average the two
     loops; (3) rotate each station onto the previous one (best circular match) so
@@ -313,7 +313,7 @@ def process_ring_scans(
 ) -> DeviationMap:
     """Process raw laser ring scans (``z_m, loop, angle_deg, distance_m``) into a map.
 
-    The four steps of SPEC 6 (module docstring). ``max_loop_shift_deg`` bounds the
+    The four steps of docs/physics.md §6 (module docstring). ``max_loop_shift_deg`` bounds the
     backward-loop shift searched in step 1.
     """
     path = Path(path)

@@ -260,7 +260,7 @@ class JointGeometry:
 
     @property
     def required_slip(self) -> float:
-        """SPEC 2.2 slip to full contact, L_slip = L_overlap (1 - sin beta / sin alpha) [m].
+        """docs/physics.md §2.2 slip to full contact, L_slip = L_overlap (1 - sin beta / sin alpha) [m].
 
         L_overlap is the overlap *at full contact*, ``full_contact_overlap``, so that
         first-contact overlap + L_slip = L_overlap (which makes L_slip =

@@ -1,4 +1,4 @@
-"""Velocity-dependent Coulomb friction law (SPEC 4).
+"""Velocity-dependent Coulomb friction law (docs/physics.md §4).
 
 mu(v) = mu_d + (mu_s - mu_d) exp(-d_c |v|), with |v| the relative slip speed
 in m/s and d_c in s/m. Works on numpy arrays and on UFL expressions.

@@ -1,4 +1,4 @@
-"""Loads on the TP and their time histories (SPEC 3). SI units: N, s, Hz, m.
+"""Loads on the TP and their time histories (docs/physics.md §3). SI units: N, s, Hz, m.
 
 Conventions: z is the axis, up; an axial force is along +z (negative pushes the TP
 down onto the MP, positive pulls it off); "lateral" is the horizontal direction at
@@ -39,7 +39,9 @@ from dolfinx.fem import petsc as fem_petsc
 from common.case import construct
 from solver.probes import PointLocator
 
-ECCENTRIC_COEFFICIENT = 0.3632  #: eccentric-motor force amplitude per f^2 [N/Hz^2] (SPEC 3)
+ECCENTRIC_COEFFICIENT = (
+    0.3632  #: eccentric-motor force amplitude per f^2 [N/Hz^2] (docs/physics.md §3)
+)
 DIRECTIONS = ("axial", "lateral", "both")
 _MODE = re.compile(r"^\s*(mode|ranked)\s+(\d+)\s*$")
 
@@ -399,7 +401,7 @@ def frequency_steps(
     **stage_options: Any,
 ) -> list[Stage]:
     """Step-wise frequency increase: f_start, f_start + f_step, ... up to f_stop [Hz] (included
-    when it is on the grid), each held ``dwell_s`` [s] (SPEC 3: 10 -> 130 Hz in 10 Hz steps of
+    when it is on the grid), each held ``dwell_s`` [s] (docs/physics.md §3: 10 -> 130 Hz in 10 Hz steps of
     0.5 s with the eccentric amplitude). ``stage_options``: direction, lateral_fraction, ..."""
     if not (f_start_hz > 0 and f_step_hz > 0 and f_stop_hz >= f_start_hz):
         raise ValueError(
@@ -419,6 +421,6 @@ def frequency_ramp(
     amplitude_N: float | str = "eccentric",
     **stage_options: Any,
 ) -> list[Stage]:
-    """A slow linear frequency ramp f_start -> f_stop [Hz] over ``duration_s`` [s] (SPEC 3:
+    """A slow linear frequency ramp f_start -> f_stop [Hz] over ``duration_s`` [s] (docs/physics.md §3:
     0 -> 125 Hz over 13 to 200 s), as one stage (the phase stays continuous)."""
     return [Stage(duration_s, f_start_hz, amplitude_N, frequency_end_hz=f_stop_hz, **stage_options)]

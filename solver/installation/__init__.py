@@ -1,4 +1,4 @@
-"""The vibration-assisted installation run (SPEC 3, 5; docs/install.md).
+"""The vibration-assisted installation run (docs/physics.md §3, 5; docs/install.md).
 
 =================  ================================================================
 ``settings``       the [contact], [damping], [time], ... tables of a case

@@ -1,4 +1,4 @@
-"""Dismount of an installed joint (SPEC 3, 5.5): a pulling axial force alone, then pulling plus
+"""Dismount of an installed joint (docs/physics.md §3, 5.5): a pulling axial force alone, then pulling plus
 vibration at the ranked natural frequencies of the settled joint.
 
 :func:`dismount_case` writes the sequence into an installation case (``solver.installation``):
@@ -49,7 +49,7 @@ DISMOUNT_COLUMNS = [
 class DismountPlan:
     """The dismount sequence after the self-weight stage (SI units)."""
 
-    pull_N: float = 6e3  #: pulling (upward) static force [N] (SPEC 3 rig: 10-40 kN)
+    pull_N: float = 6e3  #: pulling (upward) static force [N] (docs/physics.md §3 rig: 10-40 kN)
     ramp_s: float = 0.05  #: ramp from the self-weight force to the pull [s]
     hold_s: float = 0.05  #: pull alone, held [s]
     n_install: int = 0  #: installation stages (ranked frequencies, self-weight held) before

@@ -56,11 +56,11 @@ def _modal(record: ModeRecord, settings: VibrationSettings, reason: str) -> Exci
 def choose_frequencies(records: list[ModeRecord], settings: VibrationSettings) -> list[Excitation]:
     """Excitation stages from the ranking of the settled joint's modes.
 
-    * the lead-in frequencies (SPEC 3 reference sequence) at the eccentric amplitude;
+    * the lead-in frequencies (docs/physics.md §3 reference sequence) at the eccentric amplitude;
     * the ``n_frequencies`` best-ranked distinct frequencies up to ``max_frequency_hz``
       (one per degenerate pair: modes within ``PAIR_TOLERANCE`` of a chosen frequency are
       its partner);
-    * the lowest (m = 2, n = 1) mode among all computed modes if not among them (SPEC 5.4: the
+    * the lowest (m = 2, n = 1) mode among all computed modes if not among them (docs/physics.md §5.4: the
       most effective; also above ``max_frequency_hz``, unless ``m2n1_mode`` is false);
     * a non-modal control frequency: the point of [f_lo / 2, f_hi] farthest from every computed
       natural frequency and every lead-in frequency in ratio (|ln(f / f_n)|: the dynamic
@@ -108,7 +108,7 @@ def choose_frequencies(records: list[ModeRecord], settings: VibrationSettings) -
                 _modal(
                     r,
                     settings,
-                    f"lowest m = 2, n = 1 mode (SPEC 5.4: most effective in the "
+                    f"lowest m = 2, n = 1 mode (docs/physics.md §5.4: most effective in the "
                     f"experiments{above})",
                 )
             )
@@ -146,7 +146,7 @@ def choose_frequencies(records: list[ModeRecord], settings: VibrationSettings) -
             -1,
             -1,
             0,
-            "SPEC 3 reference sequence, eccentric amplitude",
+            "docs/physics.md §3 reference sequence, eccentric amplitude",
         )
         for f in settings.lead_in_hz
     ]

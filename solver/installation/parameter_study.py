@@ -1,9 +1,9 @@
-"""One-at-a-time parameter study of the installation run (SPEC 4, 5.6).
+"""One-at-a-time parameter study of the installation run (docs/physics.md §4, 5.6).
 
 A *variant* is a name, the parameter it varies, and the case overrides that vary it from the
-base case. :data:`VARIANTS` holds the SPEC values: friction mu_s/mu_d 0.5/0.4 (reference) vs
-0.0625/0.05, friction decay d_c 100 (reference) vs 1 s/m, damping Rayleigh (reference) vs
-modal, and the axial mesh size halved. Each variant runs the installation pipeline into its
+base case. :data:`VARIANTS` holds the parameter-study values of docs/physics.md §4: friction
+mu_s/mu_d 0.5/0.4 (reference) vs 0.0625/0.05, friction decay d_c 100 (reference) vs 1 s/m, damping Rayleigh
+(reference) vs modal, and the axial mesh size halved. Each variant runs the installation pipeline into its
 own sub-folder; :func:`summary_rows` collects the settlement per stage and variant and
 ``solver.post.plots.plot_parameter_study`` draws it. Settlement in mm, positive down
 (``solver.installation.observers.Settlement``).
@@ -26,8 +26,8 @@ class Variant:
 
 
 def variants(base_axial_size: float) -> list[Variant]:
-    """The SPEC variants, each varied alone from the base case (reference friction 0.5/0.4,
-    d_c = 100 s/m, Rayleigh damping, axial element size ``base_axial_size`` [m])."""
+    """The parameter-study variants of docs/physics.md §4, each varied alone from the base case
+    (reference friction 0.5/0.4, d_c = 100 s/m, Rayleigh damping, axial element size ``base_axial_size`` [m])."""
     return [
         Variant(
             "base", "base", f"mu 0.5/0.4, d_c 100 s/m, rayleigh, {1e3 * base_axial_size:.0f} mm"

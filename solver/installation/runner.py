@@ -1,4 +1,4 @@
-"""Vibration-assisted installation of the slip-joint: the staged run (SPEC 3, 5).
+"""Vibration-assisted installation of the slip-joint: the staged run (docs/physics.md §3, 5).
 
 Stages of :class:`Installation`:
 

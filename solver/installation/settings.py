@@ -120,7 +120,7 @@ class TimeSettings:
 
 @dataclass(frozen=True)
 class SelfWeightSettings:
-    """``[self_weight]``: SPEC 3 self-weight emulation on the TP top face."""
+    """``[self_weight]``: docs/physics.md §3 self-weight emulation on the TP top face."""
 
     force_N: float = -10e3  #: axial force, negative = down [N]
     ramp_time_s: float = 2.0
@@ -161,7 +161,7 @@ class VibrationSettings:
     force there), "face" (spread uniformly over the TP top face: on a perfect joint it
     excites only m = 0 and m = 1 modes), "shaker" (a point force at ``shaker_height_m``
     above the TP's lower end, ``angle_deg``). Automatic schedule: the ``lead_in_hz``
-    stages at the eccentric-motor amplitude 0.3632 f^2 (SPEC 3: 68 and 100 Hz), then each
+    stages at the eccentric-motor amplitude 0.3632 f^2 (docs/physics.md §3: 68 and 100 Hz), then each
     chosen natural frequency and the control frequency at ``amplitude_N``, each
     ``stage_duration_s`` long, in increasing frequency.
     """

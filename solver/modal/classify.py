@@ -1,6 +1,6 @@
 """Classification of mode shapes of thin-walled tubes: wave numbers (m, n).
 
-Conventions (SPEC 5): the tube axis is the z axis through the origin; m counts
+Conventions (docs/physics.md §5): the tube axis is the z axis through the origin; m counts
 circumferential waves (m = 0 axisymmetric, m = 1 beam-like); n counts nodal
 circles along the part's axis, so n = 0 is the lowest axial shape (no node) and
 n = 1 has one nodal circle.

@@ -11,7 +11,7 @@ dominates the kinetic energy, and the settlement indicators of
   eccentric motor or shaker fixed to one side), which excites every m.
 
 Modes are ranked by the resonant interface slip under the eccentric-motor force
-amplitude 0.3632 f^2 N (SPEC 3) applied at the point, axially or laterally (the
+amplitude 0.3632 f^2 N (docs/physics.md §3) applied at the point, axially or laterally (the
 larger of the two), with modal damping ``zeta``: rank 1 is the most promising
 excitation frequency. Members of a degenerate pair (equal frequencies, cos/sin
 orientations) share the pair's combined indicator and rank.

@@ -71,7 +71,7 @@ STAGE_COLUMNS = [
     "reason",
 ]
 
-LATE = 0.2  #: SPEC 5.2 "each event stabilises": the last LATE of a stage ...
+LATE = 0.2  #: docs/physics.md §5.2 "each event stabilises": the last LATE of a stage ...
 LATE_SHARE = 0.05  #: ... adds less than LATE_SHARE of the stage's gain [-]
 
 
@@ -189,17 +189,19 @@ def format_stage(s: dict) -> str:
     return line
 
 
-SELECTIVE = 5.0  #: SPEC 5.2 criterion: a modal stage settles >= SELECTIVE x the control [-]
+SELECTIVE = (
+    5.0  #: docs/physics.md §5.2 criterion: a modal stage settles >= SELECTIVE x the control [-]
+)
 
 
 def stabilised(gained_mm: float, late_gained_mm: float) -> bool:
-    """SPEC 5.2: a stage that settled (gain > 0) whose last ``LATE`` added less than
+    """docs/physics.md §5.2: a stage that settled (gain > 0) whose last ``LATE`` added less than
     ``LATE_SHARE`` of its gain."""
     return gained_mm > 0 and abs(late_gained_mm) < LATE_SHARE * gained_mm
 
 
 def format_stabilisation(stages: list[dict]) -> list[str]:
-    """Summary lines: which vibration stages ended at rest (SPEC 5.2), with the share of their
+    """Summary lines: which vibration stages ended at rest (docs/physics.md §5.2), with the share of their
     gain in their last 20 %; none without vibration stages."""
     groups: dict[str, list[str]] = {"stabilised": [], "still settling": [], "no settlement": []}
     for s in stages:
@@ -219,7 +221,7 @@ def format_stabilisation(stages: list[dict]) -> list[str]:
     if not any(groups.values()):
         return []
     return [
-        f"settlement events (SPEC 5.2: stabilised when the last {100 * LATE:g} % of the stage adds "
+        f"settlement events (docs/physics.md §5.2: stabilised when the last {100 * LATE:g} % of the stage adds "
         f"< {100 * LATE_SHARE:g} % of its gain):",
         *(f"  {key}: {', '.join(items)}" for key, items in groups.items() if items),
     ]
@@ -227,12 +229,12 @@ def format_stabilisation(stages: list[dict]) -> list[str]:
 
 def frequency_selectivity(stages: list[dict], excitations) -> list[dict[str, float]]:
     """Sustained settlement rate of each modal vibration stage over that of the control stage
-    at the same amplitude (SPEC 5.2: frequency-driven settlement).
+    at the same amplitude (docs/physics.md §5.2: frequency-driven settlement).
 
     ``stages`` are the stage summaries (stage 0 the self-weight, stage k >= 1 excited by
     ``excitations[k - 1]``). The sustained rate is the gain over the second half of a stage
     over its duration [mm/s]: the first half also holds the event in which the joint settles
-    to the depth that holds the new excitation (SPEC 5.2: each event stabilises), which at a
+    to the depth that holds the new excitation (docs/physics.md §5.2: each event stabilises), which at a
     non-modal frequency is all it settles, and the tail of the previous stage. The rate over
     the whole stage is given too. One row per modal stage: frequency_Hz, rate_mm_s,
     stage_rate_mm_s, control_Hz, control_rate_mm_s, control_stage_rate_mm_s, ratio (sustained;
@@ -285,7 +287,7 @@ def format_selectivity(rows: list[dict[str, float]]) -> list[str]:
         return []
     shown = all(r["ratio"] >= SELECTIVE for r in rows)
     return [
-        f"frequency selectivity (SPEC 5.2: modal stages settle >= {SELECTIVE:g} x faster than the "
+        f"frequency selectivity (docs/physics.md §5.2: modal stages settle >= {SELECTIVE:g} x faster than the "
         f"control, over the second half of each stage): {'shown' if shown else 'NOT shown'} by "
         "this run",
         f"  control {rows[0]['control_Hz']:8.2f} Hz: {rows[0]['control_rate_mm_s']:+.4f} mm/s "

@@ -54,7 +54,7 @@ def cylinder_frequencies(
 ) -> np.ndarray:
     """Ascending natural frequencies [Hz] of circumferential wave number m >= 1.
 
-    The lowest one belongs to the lowest axial shape (n = 0 in SPEC 5's convention),
+    The lowest one belongs to the lowest axial shape (n = 0 in docs/physics.md §5's convention),
     the next bending-dominated ones to n = 1, 2, ...
     """
     if not (R > 0 and h > 0 and L > 0):

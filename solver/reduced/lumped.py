@@ -1,4 +1,4 @@
-"""Reduced (lumped-element) stick/slip model of the slip-joint installation (SPEC 7).
+"""Reduced (lumped-element) stick/slip model of the slip-joint installation (docs/physics.md §7).
 
 Degrees of freedom q = (v, u, theta, w), all in SI units (m, m, rad, m):
 

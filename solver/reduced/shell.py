@@ -287,7 +287,7 @@ def part_meridian(part: ConePart, z_low: float = 0.0) -> Meridian:
 
 @dataclass(frozen=True)
 class JointStiffness:
-    """Springs and masses of the reduced model, from axisymmetric shell statics (SPEC 7).
+    """Springs and masses of the reduced model, from axisymmetric shell statics (docs/physics.md §7).
 
     Totals over the circumference (force = 2 pi r x line load). TP: 3x3 edge
     flexibility (clamped top, ring loads H, V, M at the free lower edge), inverted,

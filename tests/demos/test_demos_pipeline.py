@@ -1,5 +1,5 @@
 """The installation pipeline with the demos' settings on the tiny joint (cases/tiny.toml: 12
-around, 0.2 m, degree 2, frictionless, as in tests/test_install_pipeline.py; here 8 steps a
+around, 0.2 m, degree 2, frictionless, as in tests/solver/installation/test_install_pipeline.py; here 8 steps a
 period, checkpoints every 50 steps, no ParaView files):
 
 * an ovality of the TP set in ``[imperfections.tp]`` reaches the mesh: the TP's inner-surface

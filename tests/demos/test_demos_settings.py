@@ -97,7 +97,7 @@ def test_bad_demo_settings_name_the_problem(overrides, words):
 
 
 def test_step_sweep_schedule():
-    """SPEC 3: 10 -> 130 Hz in 10 Hz steps of 0.5 s at the eccentric amplitude 0.3632 f^2."""
+    """docs/physics.md §3: 10 -> 130 Hz in 10 Hz steps of 0.5 s at the eccentric amplitude 0.3632 f^2."""
     schedule = Schedule(frequency_steps(10.0, 130.0, 10.0, 0.5), start_s=2.1)
     assert len(schedule.stages) == 13
     assert schedule.end_s == pytest.approx(2.1 + 13 * 0.5)

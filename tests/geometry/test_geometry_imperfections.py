@@ -1,4 +1,4 @@
-"""Imperfection maps and raw laser ring scans (SPEC 6): processing and bad-file errors."""
+"""Imperfection maps and raw laser ring scans (docs/physics.md §6): processing and bad-file errors."""
 
 import math
 from pathlib import Path

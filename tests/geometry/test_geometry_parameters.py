@@ -43,7 +43,7 @@ def test_volume_and_areas_against_quadrature(scaled, name):
 
 
 def test_scaled_case_derived_values(scaled):
-    """SPEC 2.1: straight parts placed as stated, first contact at the TP lower edge."""
+    """docs/physics.md §2.1: straight parts placed as stated, first contact at the TP lower edge."""
     mp, tp = scaled.mp, scaled.tp
     assert (mp.cone_bottom_z, mp.cone_top_z, mp.total_length) == pytest.approx((0.4, 1.4, 1.4))
     assert (tp.cone_bottom_z, tp.cone_top_z, tp.total_length) == pytest.approx((0.0, 1.0, 1.4))
@@ -58,14 +58,14 @@ def test_scaled_case_derived_values(scaled):
     gaps = [float(tp.inner_radius(zz - z) - mp.outer_radius(zz)) for zz in zs]
     assert min(gaps) > 0
     assert scaled.overlap == pytest.approx(1.4 - z)
-    # SPEC 2.2 formula, L_overlap being the overlap at full contact
+    # docs/physics.md §2.2 formula, L_overlap being the overlap at full contact
     l_full = scaled.overlap + scaled.required_slip
     ratio = math.sin(math.radians(1.0)) / math.sin(math.radians(1.05))
     assert scaled.required_slip == pytest.approx(l_full * (1 - ratio), rel=1e-12)
 
 
 def test_full_scale_case():
-    """SPEC 2.2: 6 m MP, overlap ~1.5 D at full contact, TP mass 151 t, nu = 0.33."""
+    """docs/physics.md §2.2: 6 m MP, overlap ~1.5 D at full contact, TP mass 151 t, nu = 0.33."""
     joint, material, options = load_geometry(CASES / "full_scale.toml")
     assert material.nu == 0.33
     assert joint.tp.mass(material) == pytest.approx(151e3, rel=2e-3)
@@ -76,7 +76,7 @@ def test_full_scale_case():
 
 @pytest.mark.parametrize(("angle", "d_b", "d_top"), [(1.05, 0.600, 0.584), (1.00, 0.610, 0.594)])
 def test_tabulated_top_diameters_rejected(angle, d_b, d_top):
-    """SPEC 2.1's tabulated top diameters imply ~0.46 deg and must be rejected."""
+    """docs/physics.md §2.1's tabulated top diameters imply ~0.46 deg and must be rejected."""
     with pytest.raises(ValueError, match=r"inconsistent.*imply a half-angle of 0\.46 deg"):
         ConePart(angle, d_b, 1.0, 0.4, 0.006, top_outer_diameter=d_top)
 

@@ -36,7 +36,7 @@ TP = ConePart(
 
 
 def test_eccentric_law():
-    # SPEC 3: F = 2 m_e r (2 pi f)^2 = 0.3632 f^2 N; 3.6 kN at 100 Hz
+    # docs/physics.md §3: F = 2 m_e r (2 pi f)^2 = 0.3632 f^2 N; 3.6 kN at 100 Hz
     assert eccentric_amplitude(100.0) == pytest.approx(3632.0)
     assert eccentric_amplitude(68.0) == pytest.approx(0.3632 * 68.0**2)
     stage = Stage(duration_s=0.1, frequency_hz=50.0, frequency_end_hz=150.0)

@@ -17,7 +17,7 @@ def _record(mode: int, f: float, m: int, n: int, rank: int) -> ModeRecord:
     )
 
 
-# the experiments' modes (SPEC 5.9) with a made-up ranking; 86 Hz is a degenerate pair whose
+# the experiments' modes (docs/physics.md §5.9) with a made-up ranking; 86 Hz is a degenerate pair whose
 # partners rank differently (the forcing point excites one of them, as on the joint)
 RECORDS = [
     _record(1, 50.0, 1, 0, 3),
@@ -98,7 +98,7 @@ def test_rigid_body_modes_are_not_excited():
 
 
 def test_m2n1_mode_is_added_above_the_limit():
-    """SPEC 5.4: the lowest (2, 1) mode is excited even above max_frequency_hz (on a coarse,
+    """docs/physics.md §5.4: the lowest (2, 1) mode is excited even above max_frequency_hz (on a coarse,
     stiff mesh it lies far above the ranked modes), unless m2n1_mode is false; the control
     then lies in the octave below the lowest mode, not between the dense higher modes."""
     records = [

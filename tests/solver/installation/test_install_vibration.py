@@ -1,7 +1,7 @@
-"""SPEC 5.2/5.3/5.6 vibration scenarios on the coarse joint: frequency- and amplitude-driven
+"""docs/physics.md §5.2/5.3/5.6 vibration scenarios on the coarse joint: frequency- and amplitude-driven
 settlement, and the friction decay d_c.
 
-The joint and self-weight stage of tests/test_install_scenarios.py (cases/scenario.toml: 8
+The joint and self-weight stage of tests/solver/installation/test_install_scenarios.py (cases/scenario.toml: 8
 around, 0.25 m, 10 mm in the contact zone, P2, generalised-alpha rho_inf = 0, 16 steps per
 period; 10 kN ramped over 1 s in 10 ms steps), then, as
 benchmarks/scenarios.py (whose functions it uses): the modal stage chooses the best-ranked
@@ -18,10 +18,10 @@ so about 0.04 s: the 0.1 s lead-in is 2.7 of these and the same time sets the bu
 resonance in branch (a) (0.05 s: 74 % of its steady amplitude). A (3.6 kN) is then below the
 off-resonance threshold (the joint holds it: branch (b) settles almost nothing) and 2 A above.
 
-* SPEC 5.2 (frequency-driven): at the same force A, branch (a) at the ranked natural frequency
+* docs/physics.md §5.2 (frequency-driven): at the same force A, branch (a) at the ranked natural frequency
   settles at least 5 times more than branch (b) at the control frequency.
-* SPEC 5.3 (amplitude-driven): at the non-modal f_c, 2 A settles more than 5 times what A does.
-* SPEC 5.2 (each event stabilises): the amplitude-driven events, the lead-in (the joint
+* docs/physics.md §5.3 (amplitude-driven): at the non-modal f_c, 2 A settles more than 5 times what A does.
+* docs/physics.md §5.2 (each event stabilises): the amplitude-driven events, the lead-in (the joint
   settled under 10 kN, then 10 kN + A) and branch (c), stop at an equilibrium depth within
   about 3 periods: their last 20 % adds less than 5 % of their gain (measured serially: 0.2 %
   and 2.2 %). The resonant event (a) does not stabilise within a test's time (measured here:
@@ -32,7 +32,7 @@ off-resonance threshold (the joint holds it: branch (b) settles almost nothing) 
   approaches an equilibrium depth (+0.568 mm at 1.01 s, 5.9 % of it in the last 20 %), on a
   time scale far beyond a test. So (a)'s share is printed,
   not asserted.
-* SPEC 5.6 (a slow friction decay loses the frequency selectivity): the same scenario with
+* docs/physics.md §5.6 (a slow friction decay loses the frequency selectivity): the same scenario with
   d_c = 1 s/m (SLOW_DECAY; the case has 100 s/m), lead-in and branches (a), (b), should give
   a/b < 5. NOT shown by this model: the test asserts a/b >= 5 at d_c = 100 and ends in
   pytest.xfail with the measured numbers while a/b >= 5 at d_c = 1 too.
@@ -71,7 +71,7 @@ process; the d_c = 100 part alone took 27 min 19 s serial (CPU 11 min
 24 s) and 20 min 49 s on 2 ranks beside four other heavy processes. Far above the suite's
 5 min per file; the durations cannot be cut further without breaking the physics above. So
 the tests carry the ``slow`` marker and run with ``pytest --slow`` (as the sweep test of
-tests/test_install_dismount.py).
+tests/solver/installation/test_install_dismount.py).
 """
 
 from typing import NamedTuple
@@ -89,11 +89,11 @@ pytestmark = [
     pytest.mark.slow,  # about 820 time steps, 20-30 min serially (module docstring): pytest --slow
 ]
 
-AMPLITUDE = 3600.0  #: force amplitude A [N] (SPEC 3: the eccentric motors at 100 Hz)
+AMPLITUDE = 3600.0  #: force amplitude A [N] (docs/physics.md §3: the eccentric motors at 100 Hz)
 LEAD_IN = 0.1  #: lead-in at (f_c, A) [s]
 BRANCH = 0.05  #: each branch [s]
-SELECTIVE = 5.0  #: SPEC 5.2: gain at f_r >= SELECTIVE x gain at f_c, both at A
-SLOW_DECAY = 1.0  #: friction decay coefficient d_c of SPEC 4's parameter study [s/m]
+SELECTIVE = 5.0  #: docs/physics.md §5.2: gain at f_r >= SELECTIVE x gain at f_c, both at A
+SLOW_DECAY = 1.0  #: friction decay coefficient d_c of docs/physics.md §4's parameter study [s/m]
 
 
 class InterfaceSlip:
@@ -189,7 +189,7 @@ def selectivity(s: Scenario) -> float:
 
 
 def test_frequency_driven_settlement_at_a_natural_frequency(scenario):
-    """SPEC 5.2: at the same force A (below the off-resonance threshold after the lead-in) the
+    """docs/physics.md §5.2: at the same force A (below the off-resonance threshold after the lead-in) the
     ranked natural frequency settles at least 5 times more than the control frequency."""
     joint, branches = scenario.joint, scenario.branches
     a, b = gain(branches["a"]), gain(branches["b"])
@@ -201,14 +201,14 @@ def test_frequency_driven_settlement_at_a_natural_frequency(scenario):
 
 
 def test_amplitude_driven_settlement_off_resonance(scenario):
-    """SPEC 5.3: at the non-modal f_c twice the force settles more than 5 times what A does."""
+    """docs/physics.md §5.3: at the non-modal f_c twice the force settles more than 5 times what A does."""
     b, c = gain(scenario.branches["b"]), gain(scenario.branches["c"])
     print(f"\namplitude-driven: (b) A +{b:.5f} mm, (c) 2 A +{c:.5f} mm")
     assert c > 0 and c > 5 * max(b, 0.0)
 
 
 def test_amplitude_driven_settlement_stabilises(scenario):
-    """SPEC 5.2: the lead-in and branch (c) stop at an equilibrium depth (last 20 % of the stage
+    """docs/physics.md §5.2: the lead-in and branch (c) stop at an equilibrium depth (last 20 % of the stage
     < 5 % of its gain); branch (a)'s share is printed (see the module docstring)."""
     lead, branches = scenario.lead, scenario.branches
     shares = {
@@ -224,7 +224,7 @@ def test_amplitude_driven_settlement_stabilises(scenario):
 
 
 def test_slow_friction_decay_loses_selectivity(scenario, slow_decay):
-    """SPEC 5.6: with a slow friction decay (d_c = 1 s/m) the control frequency settles about as
+    """docs/physics.md §5.6: with a slow friction decay (d_c = 1 s/m) the control frequency settles about as
     much as the natural frequency: the ratio a/b falls below 5 where the case's d_c keeps it
     above. Not shown by this model (module docstring): the test then fails as expected, with
     the measured numbers."""

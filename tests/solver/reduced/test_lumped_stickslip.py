@@ -43,7 +43,7 @@ def test_constant_load_settles_at_the_closed_form_static_slip_position(full_scal
 @pytest.mark.parametrize("d_c", [math.inf, 100.0])
 def test_energy_dissipated_per_slip_event_equals_friction_work(full_scale, d_c):
     """A strong harmonic load (1.5 x self-weight at 10 Hz) with mu_s = 0.5, mu_d = 0.3
-    gives repeated stick/slip (Coulomb step, and SPEC 4's mu(v) with d_c = 100 s/m);
+    gives repeated stick/slip (Coulomb step, and docs/physics.md §4's mu(v) with d_c = 100 s/m);
     over every slip phase,
     external work - damping - change of mechanical energy = int T xi' dt (1e-6 relative);
     over stick phases the friction does no work."""
@@ -131,7 +131,7 @@ def test_stick_to_slip_transition_sits_on_the_friction_limit(full_scale):
 
 
 def test_drop_and_self_weight_stop_short_of_full_contact(full_scale):
-    """SPEC 7: self-weight and a 10 cm drop (1.4 m/s) settle well short of L_slip, and
+    """docs/physics.md §7: self-weight and a 10 cm drop (1.4 m/s) settle well short of L_slip, and
     the drop settles further than the gentle placement."""
     joint, _, _ = full_scale
     model = make_model(full_scale, FrictionLaw(0.5, 0.3, math.inf))
