@@ -76,9 +76,10 @@ mkdir -p /opt/slipjoint
 (cd /src && tar --exclude=./.git --exclude=./.venv --exclude=./build --exclude=./output \
     --exclude='*.egg-info' --exclude=__pycache__ --exclude='*.pyc' -cf - .) | tar -C /opt/slipjoint -xf - || exit 1
 (cd /opt/slipjoint && python3 -m pip install --quiet --no-deps --no-build-isolation --break-system-packages -e .) || exit 1
+python3 -m pip install --quiet --no-deps --break-system-packages "$(grep '^ruff==' /opt/slipjoint/requirements.txt)" || exit 1
 cmake -S /opt/slipjoint -B /tmp/slipjoint-build -DPYTHON=/usr/bin/python3 -DMPIEXEC=/usr/bin/mpirun >/dev/null || exit 1
 start=$(date +%s)
-(cd /tmp/slipjoint-build && ctest --output-on-failure --timeout 1800 "$@")
+(cd /tmp/slipjoint-build && ctest --output-on-failure --timeout 3600 "$@")
 status=$?
 echo "== suite wall time: $(( $(date +%s) - start )) s (exit status $status)"
 echo "== pytest counts per CTest test (first rank's line for _mpi2; skips show only here)"
