@@ -1,4 +1,4 @@
-"""Time per step and Newton iterations per step of the joint dynamics (issue 4).
+"""Time per step and Newton iterations per step of the joint dynamics.
 
 Stage 1: self-weight emulation, axial -10 kN ramped over ``--ramp`` s on the TP top.
 Stage 2: harmonic axial forcing of ``--amplitude`` N at ``--frequency`` Hz on top of
@@ -18,7 +18,8 @@ where the ramp stopped). ``--save-displacement`` writes the final displacement p
 (to compare two versions of the code). The installation demo's contact settings are
 ``--theta -1 --gamma0 1 --max-gap-change 1e-5 --backtracks 4 --rho-inf 0 --lagged-friction``.
 The bulk away from the contact surfaces is condensed (``solver/dynamics/condensation.py``;
-``--no-condense-bulk`` to compare). The issue-4 target run (27.3 min on 2 idle cores, session 11):
+``--no-condense-bulk`` to compare). The converged joint, 2 s of self-weight ramp and 0.5 s of
+forcing:
 
     mpirun -n 2 python benchmarks/dynamics_joint.py --theta -1 --gamma0 1 --max-gap-change 1e-5 \
         --backtracks 4 --rho-inf 0 --lagged-friction --dt-ramp 0.01 --forcing 0.5 --contact-zone-above 0.08

