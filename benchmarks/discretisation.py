@@ -29,8 +29,13 @@ from solver.modal.interface import bonded_band
 
 #: (label, case overrides); the last one is the reference
 DISCRETISATIONS = [
+    (
+        "8 around, 0.25 m, degree 2 (cases/install.toml)",
+        ["mesh.n_circumferential=8", "mesh.axial_size=0.25"],
+    ),
+    ("24 around, degree 2", ["mesh.n_circumferential=24"]),
     ("32 around, degree 2", ["mesh.n_circumferential=32"]),
-    ("48 around, degree 2 (default)", []),
+    ("48 around, degree 2 (cases/scaled.toml)", []),
     ("64 around, degree 2", ["mesh.n_circumferential=64"]),
     ("24 around, degree 3", ["mesh.n_circumferential=24", "contact.degree=3"]),
     ("48 around, degree 3 (reference)", ["contact.degree=3"]),

@@ -1,43 +1,24 @@
-"""docs/physics.md §5.5 (dismount) and 5.7 (fast sweep) on the coarse joint, branched from one settled state.
+"""docs/physics.md §5.5 (dismount) and 5.7 (fast sweep) on the coarse joint, branched from one
+settled state.
 
-The joint of the default installation run (cases/coarse.toml: 8 elements around, 0.25 m
-axially, 10 mm in the contact zone, P2, 16 steps per excitation period), settled by the 10 kN
-self-weight ramped over 0.5 s in 10 ms steps (12 periods of the TP's 24 Hz axial oscillation
-on the wedge, so the ramp is slow for the TP; half the ramp of tests/solver/installation/test_install_scenarios.py
-to keep the test short), saved with solver.installation.checkpoint.
-f_r is the best-ranked natural frequency of the settled joint below the case's 300 Hz limit
-(choose_frequencies, as the installation run: the TP's m = 1 pair, 142 Hz); A = 3.6 kN
-(docs/physics.md §3 reference amplitude) at the TP's top edge (eccentric forcing).
+The joint of cases/coarse.toml, settled by the 10 kN self-weight ramped over 0.5 s in 10 ms
+steps (slow for the TP's 24 Hz axial oscillation on the wedge) and saved with
+solver.installation.checkpoint. f_r is the best-ranked natural frequency of the settled joint
+(choose_frequencies, as the installation run); A = 3.6 kN (§3) at the TP's top edge.
 
-* docs/physics.md §5.5, dismount: the axial force is ramped from the 10 kN push to a pull P over 0.05 s and
-  held for 0.05 s (solver.installation.dismount.DismountPlan): the pull alone moves the TP up by less than
-  1 mm and the contact stays closed; then P plus A at f_r for at most 0.05 s separates the TP:
-  "separated" = the TP is above its first-contact position (it moved up by more than its
-  settlement; perfect cones cannot touch there) and the contact normal force is below 1 % of
-  the settled one N (solver.installation.dismount's criterion). P lies halfway between the rigid Coulomb
-  pull-out forces N (mu cos(alpha) - sin(alpha)) with mu_d (the pull alone stays below it) and
-  with mu_s minus A (the peak pull P + A exceeds it): of the order of the self-weight force
-  (measured 7.88 kN; 8.56 / 10.80 kN pull-out forces of N = 22.4 kN). Measured: the pull alone
-  moves the TP up 0.0004 mm; with A at f_r = 142.17 Hz it is 6.85 mm above its first-contact
-  position, all contact open, after 0.04 s. The release on this joint is amplitude-driven, not
-  resonant (exploratory runs from the same state, not in this test to keep it short): the same
-  pull + A at the non-modal control f_r / 2 = 71.08 Hz separated it as well (after 0.03 s), and
-  a 4 kN pull + A (peak 7.6 kN, below both pull-out forces) held for 0.05 s at f_r and at f_r / 2
-  alike (the TP crept up 0.046 and 0.063 mm). So the test shows "pull alone holds, pull +
-  vibration releases", not that the frequency must be resonant.
-* docs/physics.md §5.7, fast sweep - NOT reproduced; what holds is tested. From the settled state preloaded
-  statically to the peak force 10 kN + A and back (the quasi-static share of the settlement
-  that a force of amplitude A causes at any frequency), two branches of equal duration
-  T = 0.05 s and amplitude A: a dwell at f_r and a linear ramp 0.8 f_r -> 1.2 f_r. The ramp
-  crosses the half-power band 2 zeta f_r (about 3 Hz at 1 % damping) in about 2.5 ms, far
-  shorter than the resonance build-up time 1/(zeta omega_r) = 0.11 s, so docs/physics.md §5.7 expects it
-  to settle less. Measured (serial and 2 ranks): dwell +0.065 mm, ramp +0.072 mm (ratio 1.12):
-  about 9-10 um per excitation cycle in both, i.e. the TP ratchets down by a similar amount each
-  cycle at any frequency of this band instead of building up a resonance (the 8-around P2 mesh
-  locks, so its 142 Hz pair is not a physical mode, docs/install.md "Known problems"). The
-  sweep tests take about 6 min serially and twice that on 2 ranks, so they carry the ``slow``
-  marker and run with ``pytest --slow``; they assert what holds: both branches settle
-  beyond the static peak-force settlement (docs/physics.md §5.7 itself is not asserted: it fails here).
+* §5.5, dismount: the axial force goes from the 10 kN push to a pull P over 0.05 s and is held
+  for 0.05 s (solver.installation.dismount.DismountPlan): the pull alone moves the TP up by less
+  than 1 mm and the contact stays closed; then P plus A at f_r for at most 0.05 s separates the
+  TP (above its first-contact position, contact normal force below 1 % of the settled one).
+  P lies between the rigid Coulomb pull-out forces N (mu cos(alpha) - sin(alpha)) with mu_d
+  and with mu_s minus A. The test shows "pull alone holds, pull + vibration releases"; on this
+  joint the release is amplitude-driven (docs/install.md).
+* §5.7, fast sweep (marked ``slow``, about 6 min serially): from the settled state preloaded
+  statically to 10 kN + A and back, two branches of 0.05 s at amplitude A, a dwell at f_r and
+  a linear ramp 0.8 f_r -> 1.2 f_r, which crosses the half-power band far faster than the
+  resonance builds up. The test asserts what holds, that both branches settle beyond the
+  static peak-force settlement; that the ramp settles less is not reproduced on this joint
+  (docs/install.md gives the numbers).
 """
 
 import numpy as np

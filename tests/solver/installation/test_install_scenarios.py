@@ -1,29 +1,21 @@
 """docs/physics.md §5 observations reproduced by the joint model: scenario tests on a coarse joint.
 
-The joint of the default installation run (cases/scenario.toml: the coarse joint of
-cases/coarse.toml, 8 elements around, 0.25 m axially, 10 mm axially in the contact zone around
-the TP's lower edge, P2, skew-symmetric Nitsche with gamma0 = 1, gap-limited Newton steps,
-generalised-alpha rho_inf = 0); self-weight 10 kN ramped over 1 s
-(half the docs/physics.md §3 ramp time, to keep the test short) in 10 ms steps. The step must resolve
-the TP's axial oscillation on the wedge (about 24 Hz here: hoop stiffness of the contact
-band against the TP's mass): with 20 ms steps generalised-alpha (rho_inf = 0) damps it out and
-the TP slides steadily instead of in stick-slip steps (measured: rate 1.41 mm/s for most of
-a 2 s ramp).
+cases/scenario.toml: the coarse joint of cases/coarse.toml (8 elements around, 0.25 m axially,
+10 mm axially in the contact zone, P2) with the self-weight of 10 kN ramped over 1 s (half the
+§3 ramp time) in 10 ms steps, which resolve the TP's axial oscillation on the wedge (about
+24 Hz) so that the TP moves in stick-slip steps rather than sliding steadily.
 
-* docs/physics.md §5.1: under the slowly increasing axial load the TP settles in stick-slip steps:
-  several stick -> slip transitions of the TP as a whole (solver.post.report.stick_slip_events),
-  with intervals at rest in between.
-* docs/physics.md §5.6 (first half): lower friction (mu_s/mu_d = 0.0625/0.05) settles more under the
-  same load than the reference friction (0.5/0.4) (compared at a quarter of the ramp: the
-  low-friction run needs many Newton iterations per step later in the ramp).
-* docs/physics.md §5.8: the natural frequencies of the settled joint (contact tangent of the current
-  contact set, solver.installation.model.settled_modes) rise with settlement: the lowest modes at
-  the end of the ramp lie above those at half the load.
+* §5.1: under the slowly increasing axial load the TP settles in stick-slip steps: several
+  stick -> slip transitions of the TP as a whole (solver.post.report.stick_slip_events), with
+  intervals at rest in between.
+* §5.6 (first half): lower friction (mu_s/mu_d = 0.0625/0.05) settles more under the same load
+  than the reference friction (0.5/0.4), compared at a quarter of the ramp.
+* §5.8: the natural frequencies of the settled joint (contact tangent of the current contact
+  set, solver.installation.model.settled_modes) rise with settlement: the lowest modes at the
+  end of the ramp lie above those at half the load.
 
-The vibration scenarios are tests/solver/installation/test_install_vibration.py (docs/physics.md
-§5.2, 5.3; marked ``slow``, run with ``pytest --slow``: too long for the suite) and
-tests/solver/installation/test_install_dismount.py (docs/physics.md §5.5; 5.7 marked ``slow``);
-docs/install.md reports their measured outcome.
+The vibration scenarios are test_install_vibration.py (§5.2, 5.3, 5.6) and
+test_install_dismount.py (§5.5, 5.7); docs/install.md reports their measured outcome.
 """
 
 import numpy as np
