@@ -1,0 +1,110 @@
+"""Cost of one vibration stage of the installation run, step by step, from the settled joint.
+
+Sets up the case's joint, settles it under the self-weight stage (ramp and hold with the case's
+settings) or restores that state from ``--checkpoint`` (written there on the first run), then
+runs ``--steps`` steps of a stage at ``--frequency`` with the case's forcing and amplitude
+(``--amplitude``: N or "eccentric") and vibration scheme. Prints per step the wall time, Newton
+and GMRES iterations, factorisations and the residual norms of the Newton iterations; then the
+mean per step and the phase breakdown (``benchmarks/phase_timer.py``).
+
+    mpirun -n 2 python benchmarks/vibration_stage.py --case scaled --steps 12
+    mpirun -n 2 python benchmarks/vibration_stage.py --case scaled --set self_weight.scheme=\\"generalised-alpha\\" \\
+        --set self_weight.rho_inf=0 --checkpoint output/settled_scaled_rho0
+"""
+
+import argparse
+import sys
+import time
+
+from common import backend  # noqa: F401
+
+import numpy as np
+from mpi4py import MPI
+
+from benchmarks.phase_timer import PhaseTimer
+from common.case import read_case
+from solver.dynamics.loads import Schedule
+from solver.dynamics.time_loop import run
+from solver.installation import checkpoint
+from solver.installation.case import InstallationCase
+from solver.installation.model import attach_vibration, set_up_joint_model
+
+
+def main(argv=None) -> int:
+    p = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    p.add_argument("--case", default="scaled", help="case file or preset name in cases/")
+    p.add_argument(
+        "--set", action="append", default=[], metavar="TABLE.KEY=VALUE", help="case override"
+    )
+    p.add_argument("--frequency", type=float, default=68.0, help="forcing frequency [Hz]")
+    p.add_argument("--amplitude", default="eccentric", help='force amplitude [N] or "eccentric"')
+    p.add_argument("--steps", type=int, default=16, help="time steps of the stage")
+    p.add_argument(
+        "--checkpoint",
+        default=None,
+        help="folder of the settled state: restored if it exists, else written after settling",
+    )
+    a = p.parse_args(argv)
+    if not (a.frequency > 0 and a.steps > 0):
+        p.error("--frequency and --steps must be positive")
+    amplitude = a.amplitude if a.amplitude == "eccentric" else float(a.amplitude)
+    comm = MPI.COMM_WORLD
+    say = print if comm.rank == 0 else (lambda *args, **kw: None)
+    case = InstallationCase.from_dict(read_case(a.case, a.set))
+    model = set_up_joint_model(comm, case)
+    problem = model.problem
+    say(f"{a.case}: {model.n_dofs} dofs", flush=True)
+    if a.checkpoint is not None and checkpoint.exists(a.checkpoint, comm):
+        checkpoint.restore(a.checkpoint, problem)
+        say(f"settled state restored from {a.checkpoint} (t = {problem.t:.3f} s)", flush=True)
+    else:
+        sw = case.self_weight
+        t0 = time.perf_counter()
+        run(problem, sw.ramp_time_s + sw.hold_s, sw.dt_s, progress=False)
+        say(f"self-weight stage: {time.perf_counter() - t0:.1f} s", flush=True)
+        if a.checkpoint is not None:
+            checkpoint.save(a.checkpoint, problem, {"case": a.case, "overrides": a.set})
+    settled = model.settlement(problem)["settlement_mm"]
+    dt = 1.0 / (a.frequency * case.time.steps_per_period)
+    stage = case.vibration.stage(a.steps * dt, a.frequency, amplitude)
+    attach_vibration(model, Schedule([stage], start_s=problem.t))
+    problem.set_scheme(case.vibration_scheme())
+    say(
+        f"settlement {settled:.4f} mm; {a.frequency} Hz, amplitude {amplitude}, "
+        f"{case.vibration.forcing} forcing, dt = {dt:.3e} s",
+        flush=True,
+    )
+    timer = PhaseTimer().install()
+    last = [time.perf_counter(), 0, 0]
+    newton = []
+
+    def log(problem) -> dict:
+        now = time.perf_counter()
+        gmres, factorisations = timer.gmres, timer.calls["factorisation"]
+        result = problem.last_result
+        newton.append(result.iterations)
+        say(
+            f"  t = {problem.t:.6f} s: {now - last[0]:6.2f} s, Newton {result.iterations}, "
+            f"GMRES {gmres - last[1]}, factorisations {factorisations - last[2]}, settlement "
+            f"{model.settlement(problem)['settlement_mm']:.5f} mm; ||F|| [N] "
+            + " ".join(f"{r:.1e}" for r in result.residual_norms),
+            flush=True,
+        )
+        last[:] = [now, gmres, factorisations]
+        return {}
+
+    t0 = time.perf_counter()
+    rows = run(problem, problem.t + a.steps * dt, dt, observers=[log], progress=False)
+    wall = time.perf_counter() - t0
+    say(
+        f"{len(rows)} steps: {wall / len(rows):.3f} s/step, Newton {np.mean(newton):.2f}/step, "
+        f"GMRES {timer.gmres / len(rows):.1f}/step, {timer.calls['factorisation']} "
+        f"factorisations, {problem.failed_steps} step cuts"
+    )
+    timer.report(comm, len(rows), int(sum(newton)), say)
+    timer.uninstall()
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())
