@@ -2,8 +2,9 @@
 
 Sets up the case's joint, settles it under the self-weight stage (ramp and hold with the case's
 settings) or restores that state from ``--checkpoint`` (written there on the first run), then
-runs ``--steps`` steps of a stage at ``--frequency`` with the case's forcing and amplitude
-(``--amplitude``: N or "eccentric") and vibration scheme. Prints per step the wall time, Newton
+runs ``--steps`` steps of a stage at ``--frequency`` with the case's forcing, direction and
+vibration scheme and the amplitude ``--amplitude`` (N, or "eccentric": the motors' 0.3632 f^2 N).
+A restored state must have been written with the same case and overrides. Prints per step the wall time, Newton
 and GMRES iterations, factorisations and the residual norms of the Newton iterations; then the
 mean per step and the phase breakdown (``benchmarks/phase_timer.py``).
 
@@ -54,7 +55,13 @@ def main(argv=None) -> int:
     model = set_up_joint_model(comm, case)
     problem = model.problem
     say(f"{a.case}: {model.n_dofs} dofs", flush=True)
+    record = {"case": a.case, "overrides": a.set}
     if a.checkpoint is not None and checkpoint.exists(a.checkpoint, comm):
+        saved = checkpoint.read_manifest(a.checkpoint, comm)
+        if {key: saved.get(key) for key in record} != record:
+            p.error(
+                f"{a.checkpoint} holds a state of --case {saved.get('case')} with --set {saved.get('overrides')}"
+            )
         checkpoint.restore(a.checkpoint, problem)
         say(f"settled state restored from {a.checkpoint} (t = {problem.t:.3f} s)", flush=True)
     else:
@@ -63,7 +70,7 @@ def main(argv=None) -> int:
         run(problem, sw.ramp_time_s + sw.hold_s, sw.dt_s, progress=False)
         say(f"self-weight stage: {time.perf_counter() - t0:.1f} s", flush=True)
         if a.checkpoint is not None:
-            checkpoint.save(a.checkpoint, problem, {"case": a.case, "overrides": a.set})
+            checkpoint.save(a.checkpoint, problem, record)
     settled = model.settlement(problem)["settlement_mm"]
     dt = 1.0 / (a.frequency * case.time.steps_per_period)
     stage = case.vibration.stage(a.steps * dt, a.frequency, amplitude)
@@ -74,6 +81,7 @@ def main(argv=None) -> int:
         f"{case.vibration.forcing} forcing, dt = {dt:.3e} s",
         flush=True,
     )
+    cuts = problem.failed_steps
     timer = PhaseTimer().install()
     last = [time.perf_counter(), 0, 0]
     newton = []
@@ -99,7 +107,7 @@ def main(argv=None) -> int:
     say(
         f"{len(rows)} steps: {wall / len(rows):.3f} s/step, Newton {np.mean(newton):.2f}/step, "
         f"GMRES {timer.gmres / len(rows):.1f}/step, {timer.calls['factorisation']} "
-        f"factorisations, {problem.failed_steps} step cuts"
+        f"factorisations, {problem.failed_steps - cuts} step cuts"
     )
     timer.report(comm, len(rows), int(sum(newton)), say)
     timer.uninstall()

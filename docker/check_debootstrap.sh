@@ -8,7 +8,7 @@
 # /proc, /sys, /dev, /dev/pts and a fresh /dev/shm in the root, bind-mounts the
 # checkout read-only at /src, copies it to /opt/slipjoint (the image's COPY, without
 # what docker/Dockerfile.dockerignore leaves out), installs the project there as the
-# image does (pip install --no-deps -e .) and runs the test suite (CTest: serial and
+# image does (pip install --no-deps -e .) and runs the test suite (CTest: lint, serial and
 # 2-rank tests, demo --quick runs). It prints the suite's result, its wall time
 # and the installed versions of the listed packages.
 #
@@ -74,7 +74,8 @@ set -u
 rm -rf "${XDG_CACHE_HOME:-/root/.cache}/fenics" /tmp/slipjoint-build /tmp/slipjoint-output /opt/slipjoint
 mkdir -p /opt/slipjoint
 (cd /src && tar --exclude=./.git --exclude=./.venv --exclude=./build --exclude=./output \
-    --exclude='*.egg-info' --exclude=__pycache__ --exclude='*.pyc' -cf - .) | tar -C /opt/slipjoint -xf - || exit 1
+    --exclude='*.egg-info' --exclude=__pycache__ --exclude='*.pyc' \
+    --exclude=.mypy_cache --exclude=.ruff_cache --exclude=.pytest_cache -cf - .) | tar -C /opt/slipjoint -xf - || exit 1
 (cd /opt/slipjoint && python3 -m pip install --quiet --no-deps --no-build-isolation --break-system-packages -e .) || exit 1
 python3 -m pip install --quiet --no-deps --break-system-packages "$(grep '^ruff==' /opt/slipjoint/requirements.txt)" || exit 1
 cmake -S /opt/slipjoint -B /tmp/slipjoint-build -DPYTHON=/usr/bin/python3 -DMPIEXEC=/usr/bin/mpirun >/dev/null || exit 1

@@ -7,6 +7,7 @@ baseline.
 """
 
 import argparse
+import os
 import re
 import sys
 from collections import Counter
@@ -20,8 +21,14 @@ PACKAGES = ["solver", "geometry"]
 
 
 def error_counts() -> Counter:
-    """mypy's error count per file of PACKAGES."""
-    stdout, _, _ = api.run(["--ignore-missing-imports", "--no-error-summary", *PACKAGES])
+    """mypy's error count per file of PACKAGES (paths relative to the repository); raises
+    RuntimeError when mypy itself fails."""
+    os.chdir(ROOT)
+    stdout, stderr, status = api.run(["--ignore-missing-imports", "--no-error-summary", *PACKAGES])
+    if status not in (0, 1):
+        raise RuntimeError(
+            f"mypy failed (exit status {status}): {stderr.strip() or stdout.strip()}"
+        )
     return Counter(m.group(1) for m in re.finditer(r"^(\S+\.py):\d+: error:", stdout, re.M))
 
 

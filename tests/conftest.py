@@ -32,7 +32,7 @@ def pytest_collection_modifyitems(config, items):
         return
     skip = pytest.mark.skip(reason="marked slow: runs with pytest --slow")
     for item in items:
-        if "slow" in item.keywords:
+        if item.get_closest_marker("slow"):
             item.add_marker(skip)
 
 
@@ -83,7 +83,6 @@ def _case_fixture(name: str, what: str):
 tiny_case = _case_fixture("tiny", "the tests' tiny frictionless joint")
 quick_case = _case_fixture("quick", "the demos' smoke-run joint")
 coarse_case = _case_fixture("coarse", "the coarse frictional joint")
-scenario_case = _case_fixture("scenario", "the coarse joint under a 1 s self-weight ramp")
 
 
 @pytest.fixture(scope="session")

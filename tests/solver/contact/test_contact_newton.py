@@ -260,9 +260,8 @@ def test_inexact_newton_with_reused_factors():
 
 def test_distributed_newton_follows_the_serial_one():
     """The Newton iterates of a sliding sequence on 2 ranks are those of the serial run to
-    round-off: same residual norms at every iteration above round-off, in every step. (The
-    first step of each step used to take its velocity-law direction from round-off, which
-    made the two runs differ by up to 5 % in the quadratic phase.)"""
+    round-off: same residual norms at every iteration above round-off, in every step (the first
+    iterate of a step takes the slip direction of the trial traction, not one of round-off)."""
     comm = MPI.COMM_WORLD
     if comm.size == 1:
         pytest.skip("compares a distributed run with a serial one (runs under mpiexec -n 2)")
