@@ -6,7 +6,8 @@ runs ``--steps`` steps of a stage at ``--frequency`` with the case's forcing, di
 vibration scheme and the amplitude ``--amplitude`` (N, or "eccentric": the motors' 0.3632 f^2 N).
 A restored state must have been written with the same case and overrides. Prints per step the wall time, Newton
 and GMRES iterations, factorisations and the residual norms of the Newton iterations; then the
-mean per step and the phase breakdown (``benchmarks/phase_timer.py``).
+mean per step, its ratio to one triangular solve with the zone's factors and the phase
+breakdown (``benchmarks/phase_timer.py``).
 
     mpirun -n 2 python benchmarks/vibration_stage.py --case scaled --steps 12
     mpirun -n 2 python benchmarks/vibration_stage.py --case scaled --set self_weight.scheme=\\"generalised-alpha\\" \\
@@ -107,7 +108,9 @@ def main(argv=None) -> int:
     say(
         f"{len(rows)} steps: {wall / len(rows):.3f} s/step, Newton {np.mean(newton):.2f}/step, "
         f"GMRES {timer.gmres / len(rows):.1f}/step, {timer.calls['factorisation']} "
-        f"factorisations, {problem.failed_steps - cuts} step cuts"
+        f"factorisations, {problem.failed_steps - cuts} step cuts; one triangular solve "
+        f"{1e3 * timer.triangular_solve_s():.1f} ms, step / solve = "
+        f"{wall / len(rows) / timer.triangular_solve_s():.0f}"
     )
     timer.report(comm, len(rows), int(sum(newton)), say)
     timer.uninstall()
