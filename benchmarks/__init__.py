@@ -1,3 +1,3 @@
 """Timing and convergence scripts (run as ``python benchmarks/<name>.py``); ``phase_timer``
-instruments the time step, ``scenarios`` holds the docs/physics.md §5 scenario functions shared with
-the tests."""
+instruments the time step, ``branches`` holds the docs/physics.md §5 branch functions shared with
+the tests, ``atlas`` the scenario atlas of ``scenarios.py``."""

@@ -1,7 +1,7 @@
 """Off-resonance threshold (docs/physics.md §5.3) at the control frequency: amplitude steps after a lead-in.
 
 The joint, self-weight stage and durations of tests/solver/installation/test_install_vibration.py (1 s ramp, 0.1 s
-lead-in, 0.05 s branches) and the frequencies of benchmarks/scenarios.py (``settle``: modal
+lead-in, 0.05 s branches) and the frequencies of benchmarks/branches.py (``settle``: modal
 stage, the best-ranked natural frequency f_r and the non-modal control f_c as the installation
 run chooses them), then a lead-in of ``--lead-in`` s at (f_c, A) that brings the joint to the
 depth at which it holds A. From that state (solver.installation.checkpoint) one branch per factor k of
@@ -31,7 +31,7 @@ from common import backend  # noqa: F401
 
 from mpi4py import MPI
 
-from benchmarks.scenarios import gain, harmonic_stage, late_gain, settle
+from benchmarks.branches import gain, harmonic_stage, late_gain, settle
 from solver.installation import checkpoint
 from solver.post import report
 

@@ -2,7 +2,7 @@
 settlement, stabilisation, and the friction decay d_c.
 
 The joint and self-weight stage of test_install_scenarios.py (cases/scenario.toml), then, with
-the functions of benchmarks/scenarios.py: the modal stage chooses the best-ranked natural
+the functions of benchmarks/branches.py: the modal stage chooses the best-ranked natural
 frequency f_r and a non-modal control f_c; a lead-in of LEAD_IN at f_c with A = 3.6 kN; from
 that state (solver.installation.checkpoint) three branches of BRANCH each: (a) f_r at A,
 (b) f_c at A, (c) f_c at 2 A. The lead-in is a few decay times 1/(zeta omega) of the free
@@ -28,7 +28,7 @@ import numpy as np
 import pytest
 from mpi4py import MPI
 
-from benchmarks.scenarios import SettledJoint, gain, harmonic_stage, late_gain, settle, stabilised
+from benchmarks.branches import SettledJoint, gain, harmonic_stage, late_gain, settle, stabilised
 from solver.contact import NitscheContact, Status
 from solver.installation import checkpoint
 
