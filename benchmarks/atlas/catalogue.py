@@ -1,0 +1,263 @@
+"""The scenarios of the atlas (docs/physics.md §5 observations), each a function of a
+:class:`Context` returning an :class:`~benchmarks.atlas.outcome.Outcome`; scenarios not yet in
+the atlas are listed with what they need."""
+
+import time
+from collections.abc import Callable
+from dataclasses import dataclass
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+from mpi4py import MPI
+
+from benchmarks.atlas import figures
+from benchmarks.atlas.outcome import Outcome, Row, verdict
+from benchmarks.atlas.self_weight import self_weight_run
+from common.case import read_case
+from solver.installation.case import InstallationCase
+
+__all__ = ["SCENARIOS", "Context", "Scenario"]
+
+LOW_FRICTION = ["friction.mu_s=0.0625", "friction.mu_d=0.05"]  #: docs/physics.md §4 study values
+MESH_AGREEMENT = 0.05  #: S1: settlement of the two meshes within this fraction [-]
+
+
+@dataclass
+class Context:
+    """Where and on what the scenarios run: the case (preset name or file) with its overrides,
+    the output folder (one sub-folder per scenario and per shared run)."""
+
+    comm: MPI.Comm
+    case_name: str
+    overrides: list[str]
+    output: Path
+
+    def case(self, extra: list[str] = ()) -> InstallationCase:
+        return InstallationCase.from_dict(read_case(self.case_name, [*self.overrides, *extra]))
+
+    def joint(self) -> str:
+        """The joint in words (for the page)."""
+        c = self.case()
+        return (
+            f"`{self.case_name}` {' '.join(self.overrides)}: {c.mesh.n_circumferential} around, "
+            f"{1e3 * c.mesh.axial_size:g} mm axially ({1e3 * c.mesh.contact_axial_size:g} mm in "
+            f"the contact zone), degree {c.contact.degree}"
+        ).replace("` :", "`:")
+
+    def self_weight(
+        self, name: str, extra: list[str] = (), modes_at_s=(), until_s: float | None = None
+    ) -> dict[str, Any]:
+        return self_weight_run(
+            self.comm,
+            self.case_name,
+            [*self.overrides, *extra],
+            self.output / "runs" / name,
+            modes_at_s,
+            until_s,
+        )
+
+    def reference(self) -> dict[str, Any]:
+        """The case's self-weight stage with the modes at half the load and at its end (S1, S6,
+        S8 share it)."""
+        sw = self.case().self_weight
+        return self.self_weight("reference", modes_at_s=(0.5 * sw.ramp_time_s, sw.duration_s))
+
+    def figure(self, key: str, name: str) -> tuple[Path, str]:
+        """Path of figure ``name`` of scenario ``key`` and its path relative to the folder."""
+        folder = self.output / key
+        if self.comm.rank == 0:
+            folder.mkdir(parents=True, exist_ok=True)
+        return folder / name, name
+
+
+def _events(r: dict[str, Any]) -> str:
+    sizes = ", ".join(f"{1e3 * e:.0f}" for e in r["events_mm"])
+    n = len(r["events_mm"])
+    return f"{n} event{'' if n == 1 else 's'} ({sizes} um)"
+
+
+def s1_self_weight(ctx: Context) -> Outcome:
+    """S1: the self-weight ramp on the case's mesh and on one with half its axial size."""
+    axial = ctx.case().mesh.axial_size
+    labels = (f"{1e3 * axial:g} mm", f"{0.5e3 * axial:g} mm")
+    runs = {
+        labels[0]: ctx.reference(),
+        labels[1]: ctx.self_weight("half_axial", [f"mesh.axial_size={0.5 * axial}"]),
+    }
+    rows = [
+        Row(
+            f"stick-slip steps under the ramp, {label} mesh (at least 2 events, §5.1)",
+            f"{_events(r)}; settlement {r['settlement_mm'][-1]:.4f} mm",
+            verdict(len(r["events_mm"]) >= 2),
+        )
+        for label, r in runs.items()
+    ]
+    s = [r["settlement_mm"][-1] for r in runs.values()]
+    rows.append(
+        Row(
+            f"settlement of the two meshes within {100 * MESH_AGREEMENT:g} %",
+            f"{s[0]:.4f} mm against {s[1]:.4f} mm ({100 * (s[1] / s[0] - 1):+.2f} %)",
+            verdict(abs(s[1] / s[0] - 1) < MESH_AGREEMENT),
+        )
+    )
+    path, name = ctx.figure("S1", "settlement.png")
+    if ctx.comm.rank == 0:
+        figures.plot_settlement(runs, path, "S1: self-weight ramp, two axial mesh sizes")
+    return _outcome(ctx, "S1", rows, runs, [name, "../runs/reference/contact_status.png"])
+
+
+def s6_friction(ctx: Context) -> Outcome:
+    """S6, friction half: mu_s/mu_d 0.0625/0.05 against the case's friction, compared at a
+    quarter of the ramp (beyond it the low-friction TP slides out of the contact zone)."""
+    sw = ctx.case().self_weight
+    t = 0.25 * sw.ramp_time_s
+    reference = ctx.reference()
+    low = ctx.self_weight("low_friction", LOW_FRICTION, until_s=t)
+    s_ref = float(np.interp(t, reference["time_s"], reference["settlement_mm"]))
+    s_low = low["settlement_mm"][-1]
+    rows = [
+        Row(
+            f"lower friction settles more (§5.6), at {t:g} s ({abs(sw.force_N) * t / sw.ramp_time_s / 1e3:g} kN)",
+            f"{s_low:.4f} mm against {s_ref:.4f} mm ({s_low / s_ref:.2f} x)",
+            verdict(s_low > s_ref > 0),
+        )
+    ]
+    c = ctx.case().friction
+    runs = {f"mu {c.mu_s:g}/{c.mu_d:g}": reference, "mu 0.0625/0.05": low}
+    path, name = ctx.figure("S6", "friction.png")
+    if ctx.comm.rank == 0:
+        figures.plot_settlement(runs, path, "S6: self-weight ramp, two friction pairs")
+    return _outcome(ctx, "S6", rows, runs, [name])
+
+
+def s8_stiffening(ctx: Context) -> Outcome:
+    """S8, self-weight half: the settled joint's frequencies at half the load and at the end of
+    the stage, against a bonded band as high as the contact at the end."""
+    r = ctx.reference()
+    (t_half, f_half), (t_end, f_end) = (
+        (float(k), np.array(f)) for k, f in r["frequencies_Hz"].items()
+    )
+    bonded = np.array(r["bonded_Hz"])
+    with np.errstate(divide="ignore"):  # a joint that is not yet held has rigid-body modes
+        rise = f_end / f_half - 1
+    rows = [
+        Row(
+            "natural frequencies rise with settlement (§5.8): the ten lowest at the end against "
+            "half the load",
+            f"{100 * rise.min():+.2f} % to {100 * rise.max():+.2f} % "
+            f"(settlement {np.interp(t_half, r['time_s'], r['settlement_mm']):.3f} -> "
+            f"{r['settlement_mm'][-1]:.3f} mm)",
+            verdict(bool(np.all(rise > 0))),
+        ),
+        Row(
+            f"settled joint against a bonded band of the contact's height "
+            f"({1e3 * r['contact_height_m']:.0f} mm)",
+            f"{100 * (f_end / bonded - 1).min():+.2f} % to {100 * (f_end / bonded - 1).max():+.2f} %",
+            "measured",
+        ),
+    ]
+    path, name = ctx.figure("S8", "frequencies.png")
+    if ctx.comm.rank == 0:
+        figures.plot_frequencies(
+            {
+                f"settled, {t_half:g} s": f_half,
+                f"settled, {t_end:g} s": f_end,
+                f"bonded band {1e3 * r['contact_height_m']:.0f} mm": bonded,
+            },
+            path,
+            "S8: natural frequencies of the settled joint",
+        )
+    return _outcome(ctx, "S8", rows, {"reference": r}, [name])
+
+
+def _outcome(
+    ctx: Context, key: str, rows: list[Row], runs: dict[str, dict], figure_names: list[str]
+) -> Outcome:
+    """The outcome of scenario ``key`` with the wall times of the runs it used."""
+    return Outcome(
+        key,
+        SCENARIOS[key].title,
+        ctx.joint(),
+        rows,
+        {r["name"]: r["wall_s"] for r in runs.values()},
+        ctx.comm.size,
+        figure_names,
+    )
+
+
+@dataclass(frozen=True)
+class Scenario:
+    """A scenario: its title, its criterion, and the function that runs it (None: not yet in
+    the atlas, ``needs`` says what it takes)."""
+
+    title: str
+    criterion: str
+    run: Callable[[Context], Outcome] | None = None
+    needs: str = ""
+
+
+_VIBRATION = "vibration stages on this joint (docs/install.md, Cost)"
+
+SCENARIOS: dict[str, Scenario] = {
+    "S1": Scenario(
+        "self-weight ramp, two axial mesh sizes",
+        "stick-slip steps (count and size of the events); settlement of both meshes; the same "
+        "qualitative behaviour",
+        s1_self_weight,
+    ),
+    "S2": Scenario(
+        "reference sequence, ten best-ranked modes and a control at 3.6 kN",
+        "per stage the settlement gained and the sustained rate; modal stages at least 5 times "
+        "the control; the last 20 % of a stage adds less than 5 % of its gain",
+        needs=_VIBRATION,
+    ),
+    "S3": Scenario(
+        "amplitude-driven settlement at two non-modal frequencies",
+        "the amplitude threshold bracketed to 10 %; above it settlement off resonance, below "
+        "it none",
+        needs=_VIBRATION,
+    ),
+    "S4": Scenario(
+        "which modes work",
+        "settlement rate per ranked mode at equal force; axial against axial plus 5 % lateral "
+        "at an anti-symmetric mode",
+        needs=_VIBRATION,
+    ),
+    "S5": Scenario(
+        "dismount",
+        "pull alone at 1 and 1.25 times the self-weight force; pull plus vibration at the best "
+        "mode releases, at the control frequency it does not",
+        needs=_VIBRATION,
+    ),
+    "S6": Scenario(
+        "friction and damping",
+        "lower friction settles more under self-weight; d_c = 1 against 100 and Rayleigh "
+        "against modal damping: the selectivity ratio of S2",
+        s6_friction,
+        needs="the d_c and damping halves: S2's " + _VIBRATION,
+    ),
+    "S7": Scenario(
+        "sweeps",
+        "step-wise 10 to 130 Hz; a fast linear ramp across the best mode settles less than a "
+        "slow one",
+        needs=_VIBRATION,
+    ),
+    "S8": Scenario(
+        "stiffening",
+        "natural frequencies of the settled joint rise with settlement; against a bonded band "
+        "of the same height",
+        s8_stiffening,
+        needs="the frequencies after each settling stage of S2: " + _VIBRATION,
+    ),
+}
+
+
+def run_scenario(ctx: Context, key: str) -> Outcome:
+    """Run scenario ``key`` (collective); its outcome is saved in ``output/key``."""
+    t0 = time.perf_counter()
+    outcome = SCENARIOS[key].run(ctx)
+    if ctx.comm.rank == 0:
+        outcome.save(ctx.output / key)
+        print(f"{key}: {outcome.title} ({time.perf_counter() - t0:.0f} s)", flush=True)
+    return outcome

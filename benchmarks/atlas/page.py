@@ -1,0 +1,71 @@
+"""``docs/scenarios.md``: the atlas page, rebuilt from the outcomes found in the output folder
+(every scenario run so far with the same output folder), with their figures copied beside it."""
+
+import shutil
+from pathlib import Path
+
+from benchmarks.atlas.catalogue import SCENARIOS
+from benchmarks.atlas.outcome import Outcome
+
+__all__ = ["write_page"]
+
+HEADER = """# Scenario atlas
+
+The observations of docs/physics.md §5 run on one joint, each against its criterion. The page is
+written by
+
+    mpirun -n 2 python benchmarks/scenarios.py --all          # or a list: S1 S8
+
+which runs the scenarios, keeps each one's outputs in `output/atlas/<scenario>/` (runs that
+scenarios share, in `output/atlas/runs/`, are made once) and rebuilds this page from all the
+scenarios found there. A verdict is "reproduced" or "not reproduced" where the criterion is a
+test, "measured" where it is a figure to report. Wall times are on {ranks} MPI rank(s) of the
+machine that ran it.
+"""
+
+
+def _figure_name(key: str, relative: str) -> str:
+    return f"{key}_{Path(relative).name}"
+
+
+def write_page(output: Path, page: Path) -> None:
+    """Rebuild ``page`` from the outcomes in ``output`` (call on one rank)."""
+    outcomes = {k: o for k in SCENARIOS if (o := Outcome.load(output / k)) is not None}
+    figures = page.parent / "figures" / "scenarios"
+    figures.mkdir(parents=True, exist_ok=True)
+    ranks = {o.ranks for o in outcomes.values()} or {0}
+    runs: dict[str, float] = {}
+    for o in outcomes.values():
+        runs |= o.runs
+    lines = [HEADER.format(ranks=", ".join(map(str, sorted(ranks))))]
+    joints = sorted({o.joint for o in outcomes.values()})
+    lines += [f"Joint: {j}.\n" for j in joints]
+    lines += [
+        f"Wall time of the scenarios below: {sum(runs.values()) / 60:.1f} min "
+        f"({len(runs)} runs, each counted once).\n",
+        "| scenario | criterion | measured | verdict | wall time |",
+        "|---|---|---|---|---|",
+    ]
+    for key, o in outcomes.items():
+        for i, row in enumerate(o.rows):
+            head = f"{key}: {o.title}" if i == 0 else ""
+            wall = f"{o.wall_s / 60:.1f} min" if i == 0 else ""
+            lines.append(f"| {head} | {row.criterion} | {row.measured} | {row.verdict} | {wall} |")
+    for key, o in outcomes.items():
+        lines.append(f"\n## {key}: {o.title}\n")
+        lines.append(f"Criterion: {SCENARIOS[key].criterion}.\n")
+        if SCENARIOS[key].needs:
+            lines.append(f"Not in this scenario yet: {SCENARIOS[key].needs}.\n")
+        for relative in o.figures:
+            name = _figure_name(key, relative)
+            shutil.copyfile(output / key / relative, figures / name)
+            lines.append(f"![{key} {Path(relative).stem}](figures/scenarios/{name})\n")
+    missing = [k for k in SCENARIOS if k not in outcomes]
+    if missing:
+        lines.append("\n## Not in the atlas yet\n")
+        lines.append("| scenario | criterion | needs |")
+        lines.append("|---|---|---|")
+        for key in missing:
+            s = SCENARIOS[key]
+            lines.append(f"| {key}: {s.title} | {s.criterion} | {s.needs or 'a run'} |")
+    page.write_text("\n".join(lines) + "\n")
