@@ -16,6 +16,8 @@ input then differed at round-off (1e-18 m in a Newton correction), which stick-s
 amplified to 5e-8 relative in the settlement, beyond the 1e-8 a resumed run must meet.
 PETSc's plain loops are deterministic; they are used unless the user's PETSc options
 say otherwise (docs/contact.md, section 6).
+
+BLAS threads: one per rank (see below).
 """
 
 try:  # PyPI wheel
@@ -30,3 +32,14 @@ for _name in ("vec_mdot_use_gemv", "vec_maxpy_use_gemv"):
     if not _options.hasName(_name):
         _options.setValue(_name, False)
     _options.getBool(_name)  # marked as used: no "unused option" warning from a run without vectors
+
+# BLAS threads: one per rank. OpenBLAS (PETSc's, in the factorisations, and NumPy's and SciPy's,
+# in the dense contact problems) starts one thread per core in every rank by default: the ranks
+# of an MPI run then oversubscribe the cores (a 2-rank run on 2 cores ran severalfold slower),
+# and the dense contact problems (matrices of a few hundred to a few thousand rows) run slower on
+# two threads than on one even in a serial run. The limit applies to the libraries loaded when it
+# is set: SciPy's own OpenBLAS is loaded first.
+import scipy.linalg  # noqa: E402, F401
+import threadpoolctl  # noqa: E402
+
+threadpoolctl.threadpool_limits(1, "blas")

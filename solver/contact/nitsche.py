@@ -24,6 +24,8 @@ of the normal n_m and of the projection y with u (curvature/geometric terms of o
 lambda x rotation) are dropped.
 """
 
+from dataclasses import dataclass
+
 from mpi4py import MPI
 from petsc4py import PETSc
 
@@ -36,11 +38,37 @@ import dolfinx.fem.petsc
 from common.material import Material
 from solver.contact.assembly import PointMatrices, assemble_point_vector, grouped_products
 from solver.contact.friction import FrictionLaw
+from solver.contact.law import derivative, multipliers
 from solver.contact.model import ContactState, Status
 from solver.contact.pairing import Pairing, pair
 from solver.contact.surfaces import MasterSurface, SlaveQuadrature
 
-__all__ = ["NitscheContact"]
+__all__ = ["NitscheContact", "PointOperators", "TrialTractions"]
+
+
+@dataclass
+class TrialTractions:
+    """Per slave point (this rank's): the trial traction P = P_n n + P_t (np, 3) [Pa], the contact
+    normal n (np, 3), the friction coefficient mu (np,) and whether the point is paired."""
+
+    traction: npt.NDArray
+    normal: npt.NDArray
+    mu: npt.NDArray
+    paired: npt.NDArray
+
+
+@dataclass
+class PointOperators:
+    """Linear operators of points q on global (unrolled) dofs: E = E_slave + master and
+    F = F_slave + master, E_slave and F_slave (q, 3, nd_s) on ``slave_dofs`` (q, nd_s), the master
+    part (q, 3, nd_m) on ``master_dofs`` (q, nd_m) [Pa/m]; ``weight`` w / gamma (q,) [m^3/Pa]."""
+
+    slave_dofs: npt.NDArray
+    E_slave: npt.NDArray
+    F_slave: npt.NDArray
+    master_dofs: npt.NDArray
+    master: npt.NDArray
+    weight: npt.NDArray
 
 
 class NitscheContact:
@@ -183,23 +211,23 @@ class NitscheContact:
         P_n = sigma_n + gamma * p.gap
         P_t = sigma_t - gamma[:, None] * ds
         paired = p.paired
-        active = paired & (P_n <= 0)  # generalized derivative: the kink P_n = 0 counts as active
-        lam_n = np.where(active, P_n, 0.0)
-        pressure = -lam_n
         speed = np.zeros(len(x)) if self.dt is None else np.linalg.norm(ds, axis=1) / self.dt
         mu = self.friction.coefficient(self._speed_old if self.lagged_friction else speed)
-        radius = mu * pressure
-        norm_Pt = np.linalg.norm(P_t, axis=1)
-        stick = active & (norm_Pt <= radius)
-        slip = active & ~stick
-        scale = np.where(slip, radius / np.where(norm_Pt > 0, norm_Pt, 1.0), 1.0)
-        lam_t = np.where(active[:, None], P_t * scale[:, None], 0.0)
+        lam = multipliers(np.where(paired, P_n, np.inf), P_t, mu)
+        lam_n, lam_t, active, stick, slip = (
+            lam.normal,
+            lam.tangential,
+            lam.active,
+            lam.stick,
+            lam.slip,
+        )
+        pressure = -lam_n
         status = np.full(len(x), Status.OPEN, dtype=np.int8)
         status[stick & (pressure > 0)] = Status.STICK
         status[slip] = Status.SLIP
         self._lam_n, self._lam_t = lam_n, lam_t
         self._sigma_n, self._sigma_t = sigma_n, sigma_t
-        self._P_t, self._ds, self._speed, self._mu = P_t, ds, speed, mu
+        self._P_n, self._P_t, self._ds, self._speed, self._mu = P_n, P_t, ds, speed, mu
         self._active, self._stick, self._slip = active, stick, slip
         self._n = n
         velocity = ds / self.dt if self.dt is not None else np.zeros_like(ds)
@@ -212,6 +240,43 @@ class NitscheContact:
             coordinates=x,
             weights=slave.weights,
             normal=n,
+        )
+
+    def trial_tractions(self) -> TrialTractions:
+        """The points' trial tractions, normals, friction coefficients and pairing at the last
+        update (this rank's points): the input of ``solver.contact.law``."""
+        return TrialTractions(
+            self._P_n[:, None] * self._n + self._P_t,
+            self._n.copy(),
+            np.asarray(self._mu, dtype=float).copy(),
+            self.pairing.paired.copy(),
+        )
+
+    def point_operators(self, idx: npt.NDArray) -> PointOperators:
+        """The trial traction's derivative E = T - gamma jump and the test operator F = theta T -
+        gamma jump of the points ``idx`` (this rank's, paired) at the last update, split into the
+        slave part and the master part gamma psi (the same in both): the residual's contribution
+        of these points is F^T (w / gamma) lambda(P), and dP = E du (pairing, normals and mu
+        frozen)."""
+        T = self._traction(idx)
+        gdim = self.slave.gdim
+        gam = self.gamma[idx]
+        phi = self.slave.values[idx]
+        H = (phi[:, None, :, None] * np.eye(gdim)[None, :, None, :]).reshape(T.shape)
+        psi = self.pairing.master_values[idx]
+        master = gam[:, None, None, None] * psi[:, None, :, None] * np.eye(gdim)[None, :, None, :]
+        blocks = self.master.blocks[self.pairing.facet[idx]]
+        return PointOperators(
+            slave_dofs=(self._slave_blocks[idx][:, :, None] * gdim + np.arange(gdim)).reshape(
+                len(idx), T.shape[2]
+            ),
+            E_slave=T - gam[:, None, None] * H,
+            F_slave=self.theta * T - gam[:, None, None] * H,
+            master_dofs=(blocks[:, :, None] * gdim + np.arange(gdim)).reshape(
+                len(idx), gdim * psi.shape[1]
+            ),
+            master=master.reshape(len(idx), gdim, gdim * psi.shape[1]),
+            weight=self.slave.weights[idx] / gam,
         )
 
     def slip_directions(self) -> tuple[npt.NDArray, npt.NDArray]:
@@ -267,7 +332,7 @@ class NitscheContact:
             + g.transpose(0, 2, 1)[:, :, :, None] * n[:, None, None, :]
         )
         T += mat.lmbda * n[:, :, None, None] * g[:, None, :, :]
-        return T.reshape(len(idx), gdim, -1)
+        return T.reshape(len(idx), gdim, gdim * g.shape[1])
 
     def _jump(self, idx: npt.NDArray) -> npt.NDArray:
         """Jump operator v_s(x) - v_m(y) on [slave cell dofs, master facet dofs], shape (q, 3, nd)."""
@@ -324,35 +389,32 @@ class NitscheContact:
     def _tangent_rows(self, idx, E, jump, stick, slip, consistent: bool) -> npt.NDArray:
         """n dlambda_n + dlambda_t (q, 3, nd) at normal-tied points, from E = T - gamma jump.
 
-        d lambda_n = n . E v; d lambda_t = (I - n n) E v at stick points, the derivative of the
-        projection onto the disk of radius mu p at slip points (``consistent``; else 0).
+        d lambda = D E with D the derivative of ``solver.contact.law`` at stick and, when
+        ``consistent``, slip points (else slip points are tied normally only), plus the
+        coefficient's dependence on the slip speed when friction is not lagged.
         """
         n = self._n[idx]
-        Bn = np.einsum("pi,pik->pk", n, E)
-        Bt = E - n[:, :, None] * Bn[:, None, :]
-        R = n[:, :, None] * Bn[:, None, :] + np.where(stick[:, None, None], Bt, 0.0)
-        if consistent and slip.any():
+        D = derivative(
+            n, self._P_t[idx], self._mu[idx], -self._lam_n[idx], stick, slip & consistent
+        )
+        R = D @ E
+        if consistent and slip.any() and self.dt is not None and not self.lagged_friction:
+            # d|v| = e . d(ds) / dt with e = ds/|ds|; |ds| has no derivative at 0, where any unit
+            # vector is a generalized gradient: take the slip direction of the trial traction,
+            # -q, while ds is at round-off (the first iterate of a step), not a direction of noise
             s = np.flatnonzero(slip)
             P_t = self._P_t[idx[s]]
-            norm = np.linalg.norm(P_t, axis=1)
-            q = P_t / norm[:, None]
-            mu, p = self._mu[idx[s]], -self._lam_n[idx[s]]
-            d = (mu * p / norm)[:, None, None] * (
-                Bt[s] - q[:, :, None] * np.einsum("pi,pik->pk", q, Bt[s])[:, None, :]
+            q = P_t / np.linalg.norm(P_t, axis=1)[:, None]
+            ds = self._ds[idx[s]]
+            ds_norm = np.linalg.norm(ds, axis=1)
+            moving = ds_norm > self._ds_roundoff[idx[s]]
+            e = np.where(moving[:, None], ds / np.where(moving, ds_norm, 1.0)[:, None], -q)
+            e -= np.sum(e * n[s], axis=1)[:, None] * n[s]  # e^T (I - n n) jump
+            dmu = self.friction.derivative(self._speed[idx[s]])
+            d_radius = (-self._lam_n[idx[s]] * dmu / self.dt)[:, None] * np.einsum(
+                "pi,pik->pk", e, jump[s]
             )
-            d_radius = -mu[:, None] * Bn[s]
-            if self.dt is not None and not self.lagged_friction:
-                # d|v| = e . d(ds) / dt with e = ds/|ds|; |ds| has no derivative at 0, where any unit
-                # vector is a generalized gradient: take the slip direction of the trial traction,
-                # -q, while ds is at round-off (the first iterate of a step), not a direction of noise
-                ds = self._ds[idx[s]]
-                ds_norm = np.linalg.norm(ds, axis=1)
-                moving = ds_norm > self._ds_roundoff[idx[s]]
-                e = np.where(moving[:, None], ds / np.where(moving, ds_norm, 1.0)[:, None], -q)
-                e -= np.sum(e * n[s], axis=1)[:, None] * n[s]  # e^T (I - n n) jump
-                dmu = self.friction.derivative(self._speed[idx[s]])
-                d_radius += (p * dmu / self.dt)[:, None] * np.einsum("pi,pik->pk", e, jump[s])
-            R[s] += d + q[:, :, None] * d_radius[:, None, :]
+            R[s] += q[:, :, None] * d_radius[:, None, :]
         return R
 
     def _assemble_matrix(

@@ -34,7 +34,7 @@ from petsc4py import PETSc
 import dolfinx
 import dolfinx.la.petsc
 
-from solver.dynamics.linear_algebra import direct_solver
+from solver.dynamics.linear_algebra import direct_solver, solve_columns
 
 __all__ = ["BulkCondensation", "bulk_parts"]
 
@@ -237,29 +237,19 @@ class BulkCondensation:
         n_i = part.A_ki.getSize()[1]
         R = part.A_ki.convert("dense", PETSc.Mat())
         columns = R.getDenseArray()  # this rank's rows of all interface columns
-        width = min(self._chunk, n_i)
-        # one right-hand-side block of fixed width for every chunk, the last one padded with
-        # zero columns: SuperLU_DIST's parallel MatMatSolve corrupts memory when the number of
-        # right-hand sides changes between calls
-        Rc = PETSc.Mat().createDense(
-            ((columns.shape[0], R.getSize()[0]), (None, width)), comm=R.getComm()
-        )
-        Rc.setUp()
-        Xc = Rc.duplicate()
-        factor = part.ksp.getPC().getFactorMatrix()
         rows = []
-        for c0 in range(0, n_i, width):
-            c1 = min(c0 + width, n_i)
-            block = Rc.getDenseArray()
-            block[:] = 0.0
+
+        def fill(block: npt.NDArray, c0: int, c1: int) -> None:
             block[:, : c1 - c0] = columns[:, c0:c1]
-            Rc.assemble()
-            factor.matSolve(Rc, Xc)
-            Yc = part.A_ik.matMult(Xc)
-            rows.append(Yc.getDenseArray()[:, : c1 - c0].copy())
-            Yc.destroy()
-        for mat in (R, Rc, Xc):
-            mat.destroy()
+
+        def consume(X: PETSc.Mat, c0: int, c1: int) -> None:
+            Y = part.A_ik.matMult(X)
+            rows.append(Y.getDenseArray()[:, : c1 - c0].copy())
+            Y.destroy()
+
+        factor = part.ksp.getPC().getFactorMatrix()
+        solve_columns(factor, part.A_kk, n_i, fill, consume, min(self._chunk, n_i))
+        R.destroy()
         return np.hstack(rows) if rows else np.zeros((len(part.interface), 0))
 
     def _condensed_operator(self, A: PETSc.Mat, corrections: list[npt.NDArray]) -> None:

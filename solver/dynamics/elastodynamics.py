@@ -35,8 +35,12 @@ from solver.dynamics.condensation import BulkCondensation
 from solver.dynamics.damping import ModalDamping, RayleighDamping
 from solver.dynamics.linear_algebra import direct_solver
 from solver.dynamics.newton import ContactNewtonSolver
+from solver.dynamics.point_newton import PointNewtonSolver
 from solver.dynamics.schemes import GeneralisedAlpha, Scheme
 from solver.elasticity import epsilon, sigma
+
+#: the Newton solvers of a contact step, by name
+CONTACT_SOLVERS = {"zone": ContactNewtonSolver, "points": PointNewtonSolver}
 
 Load = Callable[[float, PETSc.Vec], None]  #: load(t, out): write the load vector f(t) [N] into out
 
@@ -92,13 +96,21 @@ class Elastodynamics:
         contact: ContactModel | None = None,
         newton_options: dict | None = None,
         condense_bulk: bool = False,
+        contact_solver: str = "zone",
     ):
         if condense_bulk and contact is None:
             raise ValueError(
                 "condense_bulk needs a contact object (the bulk is condensed away from its cells)"
             )
+        if contact_solver not in CONTACT_SOLVERS:
+            raise ValueError(
+                f"contact_solver must be one of {tuple(CONTACT_SOLVERS)}, got {contact_solver!r}"
+            )
         #: Newton on the contact zone, the bulk condensed (solver.dynamics.condensation)
         self.condense_bulk = condense_bulk
+        #: "zone": generalized Newton on the zone (solver.dynamics.newton); "points": Newton on
+        #: the contact points' tractions (solver.dynamics.point_newton)
+        self.contact_solver = contact_solver
         self._condensation: BulkCondensation | None = None
         self.V, self.M, self.K, self.bcs = V, M, K, list(bcs)
         self.scheme, self.damping, self.contact = scheme, damping, contact
@@ -166,6 +178,7 @@ class Elastodynamics:
             else:
                 self._newton.set_operator(self.A)
         else:
+            solver = CONTACT_SOLVERS[self.contact_solver]
             if self.condense_bulk:
                 self._condensation = BulkCondensation(
                     self.A,
@@ -173,14 +186,14 @@ class Elastodynamics:
                     self.contact.support_cells,
                     lu_solver=self.newton_options.get("lu_solver", "mumps"),
                 )
-                self._newton = ContactNewtonSolver(
+                self._newton = solver(
                     self._condensation.A_hat,
                     self.bcs,
                     zone=self._condensation.zone,
                     **self.newton_options,
                 )
             else:
-                self._newton = ContactNewtonSolver(self.A, self.bcs, **self.newton_options)
+                self._newton = solver(self.A, self.bcs, **self.newton_options)
 
     def initialise(self, t0: float = 0.0) -> None:
         """Set t = t0 and the consistent initial acceleration M a0 = f(t0) - K u0 - C v0 - r_c(u0)."""

@@ -3,10 +3,13 @@ preconditioner of A + J_c and the operator A + J without products with A (PETSc 
 contexts).
 """
 
+from collections.abc import Callable
+
 import numpy as np
+import numpy.typing as npt
 from petsc4py import PETSc
 
-__all__ = ["BlockLU", "SumOperator", "direct_solver", "forcing_term"]
+__all__ = ["BlockLU", "SumOperator", "direct_solver", "forcing_term", "solve_columns"]
 
 
 def direct_solver(
@@ -28,6 +31,37 @@ def direct_solver(
     if A is not None:
         ksp.setOperators(A)
     return ksp
+
+
+def solve_columns(
+    factor: PETSc.Mat,
+    A: PETSc.Mat,
+    n: int,
+    fill: Callable[[npt.NDArray, int, int], None],
+    consume: Callable[[PETSc.Mat, int, int], None],
+    width: int,
+) -> None:
+    """Solve A X = B for n columns of B with the LU ``factor`` of A, ``width`` right-hand sides at
+    a time: ``fill(block, c0, c1)`` writes this rank's rows of B's columns c0..c1 into the zeroed
+    dense block (local rows x width), ``consume(X, c0, c1)`` takes the solutions (X's first
+    c1 - c0 columns). Every block has the same width, the last one padded with zero columns:
+    SuperLU_DIST's parallel MatMatSolve corrupts memory when the number of right-hand sides
+    changes between calls."""
+    B = PETSc.Mat().createDense(
+        ((A.getLocalSize()[0], A.getSize()[0]), (None, width)), comm=A.getComm()
+    )
+    B.setUp()
+    X = B.duplicate()
+    for c0 in range(0, n, width):
+        c1 = min(c0 + width, n)
+        block = B.getDenseArray()
+        block[:] = 0.0
+        fill(block, c0, c1)
+        B.assemble()
+        factor.matSolve(B, X)
+        consume(X, c0, c1)
+    B.destroy()
+    X.destroy()
 
 
 class BlockLU:

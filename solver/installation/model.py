@@ -74,6 +74,18 @@ def _lu_package(choice: str, comm: MPI.Comm) -> str:
     return "superlu_dist" if several else "mumps"
 
 
+def _newton_options(case: InstallationCase, comm: MPI.Comm) -> dict[str, Any]:
+    """The options of the case's contact solver ([contact])."""
+    c = case.contact
+    options = {"max_iterations": c.max_iterations, "lu_solver": _lu_package(c.lu_solver, comm)}
+    if c.solver == "points":
+        return options | {"candidate_gap": c.candidate_gap}
+    return options | {
+        "max_backtracks": c.max_backtracks,
+        "max_gap_change": c.max_gap_change or None,
+    }
+
+
 def set_up_joint_model(comm: MPI.Comm, case: InstallationCase) -> JointModel:
     """Set up the joint of ``case`` at rest in its first-contact position (collective)."""
     t0 = time.perf_counter()
@@ -92,6 +104,7 @@ def set_up_joint_model(comm: MPI.Comm, case: InstallationCase) -> JointModel:
         case.friction,
         gamma0=case.contact.gamma0,
         theta=case.contact.theta,
+        quadrature_degree=case.contact.quadrature_degree or None,
         lagged_friction=case.contact.lagged_friction,
     )
     d = case.damping
@@ -118,13 +131,9 @@ def set_up_joint_model(comm: MPI.Comm, case: InstallationCase) -> JointModel:
         scheme=case.self_weight_scheme(),
         damping=damping,
         contact=contact,
-        newton_options={
-            "max_iterations": case.contact.max_iterations,
-            "max_backtracks": case.contact.max_backtracks,
-            "max_gap_change": case.contact.max_gap_change or None,
-            "lu_solver": _lu_package(case.contact.lu_solver, comm),
-        },
+        newton_options=_newton_options(case, comm),
         condense_bulk=case.contact.condense_bulk,
+        contact_solver=case.contact.solver,
     )
     problem.initialise(0.0)
     settlement = Settlement(problem.u, placed, mesh_data.cell_tags)
@@ -164,6 +173,7 @@ def settled_modes(model: JointModel, n_modes: int) -> tuple[ModalResult, Contact
             model.case.friction,
             gamma0=c.gamma0,
             theta=1,
+            quadrature_degree=c.quadrature_degree or None,
         )
         contact.update(model.problem.u)
     status = np.where(model.contact.state.status == Status.OPEN, Status.OPEN, Status.STICK)

@@ -38,6 +38,9 @@ class ContactSettings:
     theta: int = 1  #: 1 symmetric, 0 non-symmetric, -1 skew (the modal stage always uses 1)
     lagged_friction: bool = False
     degree: int = 2  #: Lagrange degree of the displacement
+    #: degree of the Gauss rule on the slave facets (0: 2 degree + 1); its points are the contact
+    #: points (docs/contact.md)
+    quadrature_degree: int = 0
     max_iterations: int = 30  #: Newton iterations per step before the step is cut
     max_backtracks: int = (
         6  #: Newton line-search halvings (solver.dynamics.newton.ContactNewtonSolver)
@@ -50,6 +53,12 @@ class ContactSettings:
     #: Newton on the contact zone with the linear bulk condensed exactly (solver.dynamics.condensation):
     #: cheaper steps, plus |interface| bulk solves whenever the step size changes
     condense_bulk: bool = False
+    #: nonlinear solver of a step: "zone" (generalized Newton on the contact zone,
+    #: solver.dynamics.newton) or "points" (Newton on the contact points' tractions,
+    #: solver.dynamics.point_newton; needs lagged_friction)
+    solver: str = "zone"
+    #: "points": slave points within this gap of the master [m] are candidates from the start
+    candidate_gap: float = 2e-6
 
     def __post_init__(self) -> None:
         if not isinstance(self.condense_bulk, bool):
@@ -68,7 +77,18 @@ class ContactSettings:
         if not self.max_gap_change >= 0:
             raise ValueError(f"max_gap_change must be >= 0 m, got {self.max_gap_change}")
         _check_choice("degree", self.degree, (1, 2, 3))
+        if not (isinstance(self.quadrature_degree, int) and self.quadrature_degree >= 0):
+            raise ValueError(
+                f"quadrature_degree must be an integer >= 0, got {self.quadrature_degree!r}"
+            )
         _check_choice("lu_solver", self.lu_solver, ("auto", "mumps", "superlu_dist"))
+        _check_choice("solver", self.solver, ("zone", "points"))
+        if self.solver == "points" and not self.lagged_friction:
+            raise ValueError(
+                'solver = "points" needs lagged_friction = true (mu fixed within a step)'
+            )
+        if not self.candidate_gap >= 0:
+            raise ValueError(f"candidate_gap must be >= 0 m, got {self.candidate_gap}")
         if self.lu_solver != "auto" and not PETSc.Sys.hasExternalPackage(self.lu_solver):
             raise ValueError(f"lu_solver {self.lu_solver!r}: this PETSc was built without it")
 

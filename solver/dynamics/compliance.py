@@ -1,0 +1,292 @@
+"""The contact compliance G = E A^-1 F^T W of a set of contact points, from fixed LU factors of a
+linear operator A on the contact zone (docs/dynamics.md, "Newton on the contact points").
+
+The trial tractions P of the contact points q (3 per point, ``solver.contact.nitsche``) change
+as dP = E du, and the points' multipliers lambda act on the structure as the load F^T W lambda,
+W = diag(w / gamma). With both operators split into a slave part and the master part M (the
+master displacement at the paired point, which moves with the pairing),
+
+    E = E_s + M,   F = F_s + M,
+
+the compliance of the points
+
+    G = E A^-1 F^T W = Q_ss + Q_sb M_b^T W' + M_b R_bs + M_b Z_bb M_b^T W'
+
+(M_b: M on the master band b, the master dofs the points can pair with) needs,
+once per A, the dense blocks Q_ss = E_s X_F, Q_sb = E_s X_b, R_bs = X_F[b] and Z_bb = X_b[b] of
+the solutions X_F = A^-1 F_s^T W and X_b = A^-1 I_b: 3 |points| + |b| solves with multiple
+right-hand sides. Each pairing then costs only sparse-dense products. G is dimensionless, the
+blocks are held on every rank; the points are ordered rank by rank, three rows per point.
+"""
+
+import numpy as np
+import numpy.typing as npt
+import scipy.sparse
+from mpi4py import MPI
+from petsc4py import PETSc
+
+from solver.contact.nitsche import PointOperators
+from solver.dynamics.linear_algebra import direct_solver, solve_columns
+
+__all__ = ["ContactCompliance"]
+
+
+def _gather_rows(comm: MPI.Comm, local: npt.NDArray) -> npt.NDArray:
+    """Rows held by the ranks, stacked rank by rank (on every rank)."""
+    return np.concatenate(comm.allgather(np.ascontiguousarray(local)))
+
+
+class ContactCompliance:
+    """LU factors of the zone operator A and the compliance blocks of contact points.
+
+    The point set and the band only grow (:meth:`extend`); A is symmetric (the Newmark operator
+    of a symmetric structure and the linear Nitsche part), so that new points and band dofs
+    need the solutions of their own columns only: A^-1 F_N^T W, A^-1 E_N^T and A^-1 I_bN.
+
+    Args:
+        A: the operator on the zone (zone numbering: the zone's dofs rank by rank), symmetric.
+        zone_dofs: the zone's global dofs (of the full space) in zone order, on every rank.
+        lu_solver: PETSc factorisation package.
+        width: right-hand sides per multiple-right-hand-side solve.
+    """
+
+    def __init__(self, A: PETSc.Mat, zone_dofs: npt.NDArray, lu_solver: str, width: int = 64):
+        self.A = A
+        self.comm: MPI.Comm = A.getComm().tompi4py()
+        self.zone_dofs = zone_dofs
+        self.start, self.end = A.getOwnershipRange()
+        self.width = width
+        self.lu = direct_solver(self.comm, A, lu_solver)
+        self.lu.setUp()
+        self.points = 0  #: contact points of the blocks (all ranks)
+        #: master band: global dofs in the order of the blocks' band rows and columns
+        self.band = np.zeros(0, dtype=np.int64)
+        self._counts = [0] * self.comm.size  # points per rank
+        self._to_block = np.zeros(0, dtype=np.int64)  # block row of each rank-major row
+        self.solves = 0  #: columns solved so far
+        self._E: PETSc.Mat | None = None
+        self._F: PETSc.Mat | None = None
+        self.reset()
+
+    def zone_index(self, dofs: npt.NDArray) -> npt.NDArray:
+        """Zone indices of global dofs (all of which must be zone dofs)."""
+        index = np.minimum(np.searchsorted(self.zone_dofs, dofs), len(self.zone_dofs) - 1)
+        if not np.array_equal(self.zone_dofs[index], dofs):
+            raise ValueError("contact operators reach dofs outside the condensed zone")
+        return index
+
+    def to_block(self, rank_major: npt.NDArray) -> npt.NDArray:
+        """Rows of the points gathered rank by rank (3 per point) in the blocks' order."""
+        out = np.empty_like(rank_major)
+        out[self._to_block] = rank_major
+        return out
+
+    def reset(self) -> None:
+        """No points and no band (the factors are kept)."""
+        self.points, self.band, self._counts = 0, np.zeros(0, dtype=np.int64), [0] * self.comm.size
+        self._to_block = np.zeros(0, dtype=np.int64)
+        self.Q_ss, self.Q_sb = np.zeros((0, 0)), np.zeros((0, 0))
+        self.R_bs, self.Z_bb = np.zeros((0, 0)), np.zeros((0, 0))
+        self._band_rows()
+
+    def points_to_block(self, rank_major: npt.NDArray) -> npt.NDArray:
+        """Per-point values gathered rank by rank in the blocks' point order."""
+        out = np.empty_like(rank_major)
+        out[self._to_block[::3] // 3] = rank_major
+        return out
+
+    # -- the blocks ---------------------------------------------------------------------------
+    def extend(self, ops: PointOperators, new: int, band: npt.NDArray) -> None:
+        """Add this rank's last ``new`` points of ``ops`` (the operators of all of its points, the
+        earlier ones first) and the master dofs ``band`` (global, the same on every rank, none
+        already in the band) to the blocks: 2 |new points| (|new points| if there were none) +
+        |band| solves."""
+        comm = self.comm
+        counts = comm.allgather(len(ops.weight))
+        added = comm.allgather(new)
+        old_counts = [c - a for c, a in zip(counts, added)]
+        if old_counts != self._counts:
+            raise ValueError("extend: the earlier points must come first, unchanged")
+        m_old, m_new = 3 * self.points, 3 * sum(added)
+        # block order: the earlier points, then the new points rank by rank
+        firsts = np.cumsum([0] + [3 * c for c in counts])
+        to_block = np.empty(3 * sum(counts), dtype=np.int64)
+        old_firsts = np.cumsum([0] + [3 * c for c in old_counts])
+        new_firsts = m_old + np.cumsum([0] + [3 * a for a in added])
+        for r in range(comm.size):
+            earlier = self._to_block[old_firsts[r] : old_firsts[r + 1]]
+            later = new_firsts[r] + np.arange(3 * added[r])
+            to_block[firsts[r] : firsts[r + 1]] = np.concatenate([earlier, later])
+        self._counts, self._to_block, self.points = counts, to_block, sum(counts)
+        for mat in (self._E, self._F):
+            if mat is not None:
+                mat.destroy()
+        cols = self.zone_index(ops.slave_dofs.ravel()).reshape(ops.slave_dofs.shape)
+        weighted = ops.F_slave * ops.weight[:, None, None]
+        rows = firsts[comm.rank] + np.arange(3 * counts[comm.rank])
+        self._E = self._point_matrix(rows, cols, ops.E_slave, 3 * self.points)
+        self._F = self._point_matrix(rows, cols, weighted, 3 * self.points)
+        # the new points alone, rank by rank (their order in the blocks)
+        first_new = counts[comm.rank] - new
+        new_rows = new_firsts[comm.rank] - m_old + np.arange(3 * new)
+        E_new = self._point_matrix(new_rows, cols[first_new:], ops.E_slave[first_new:], m_new)
+        F_new = self._point_matrix(new_rows, cols[first_new:], weighted[first_new:], m_new)
+        nb_old = len(self.band)
+        band = np.asarray(band, dtype=np.int64)
+        self.band = np.concatenate([self.band, band])
+        self._band_rows()
+        nb = len(self.band)
+        m = 3 * self.points
+        Q_ss, Q_sb = np.zeros((m, m)), np.zeros((m, nb))
+        R_bs, Z_bb = np.zeros((nb, m)), np.zeros((nb, nb))
+        Q_ss[:m_old, :m_old], Q_sb[:m_old, :nb_old] = self.Q_ss, self.Q_sb
+        R_bs[:nb_old, :m_old], Z_bb[:nb_old, :nb_old] = self.R_bs, self.Z_bb
+        new_points, new_band = slice(m_old, m), slice(nb_old, nb)
+        # A^-1 F_N^T W: the new points' columns of Q_ss and R_bs
+        EX, _, Xb = self._solve(m_new, F_new, transpose=True)
+        Q_ss[:, new_points], R_bs[:, new_points] = EX, Xb
+        if m_old:  # A^-1 E_N^T: the new points' rows of Q_ss and Q_sb (A symmetric)
+            _, FX, Xb = self._solve(m_new, E_new, transpose=True)
+            Q_ss[new_points, :m_old] = FX[:m_old].T
+            Q_sb[new_points, :nb_old] = Xb[:nb_old].T
+        if nb > nb_old:  # A^-1 I_bN: the new band's columns of Q_sb and Z_bb, rows of R_bs
+            EX, FX, Xb = self._solve(nb - nb_old, None, transpose=False, unit=nb_old)
+            Q_sb[:, new_band], Z_bb[:, new_band] = EX, Xb
+            Z_bb[new_band, :nb_old] = Xb[:nb_old].T
+            R_bs[new_band, :m_old] = FX[:m_old].T
+        E_new.destroy()
+        F_new.destroy()
+        self.Q_ss, self.Q_sb, self.R_bs, self.Z_bb = Q_ss, Q_sb, R_bs, Z_bb
+
+    def _band_rows(self) -> None:
+        """This rank's zone rows of the band (local indices) and their band positions."""
+        band_rows = self.zone_index(self.band) if len(self.band) else np.zeros(0, np.int64)
+        owned = (band_rows >= self.start) & (band_rows < self.end)
+        self._band_owned = np.flatnonzero(owned)
+        self._band_local = band_rows[owned] - self.start
+        self._band_zone = band_rows
+        self._band_order = np.argsort(_gather_rows(self.comm, self._band_owned), kind="stable")
+        self._band_sort = np.argsort(self.band, kind="stable")
+
+    def _gather_band(self, local: npt.NDArray) -> npt.NDArray:
+        """The band rows of this rank's rows ``local`` gathered, in band order."""
+        return _gather_rows(self.comm, local[self._band_local])[self._band_order]
+
+    def _point_matrix(self, rows, cols, values, m: int) -> PETSc.Mat:
+        """The AIJ matrix (m x zone) with the points' 3 rows each on their zone columns."""
+        mat = PETSc.Mat().create(comm=self.comm)
+        mat.setSizes(((len(rows), m), (self.end - self.start, self.A.getSize()[0])))
+        mat.setType(PETSc.Mat.Type.AIJ)
+        r = np.repeat(rows.reshape(-1, 3), cols.shape[1], axis=1).ravel()
+        c = np.repeat(cols, 3, axis=0).ravel()
+        mat.setPreallocationCOO(r.astype(PETSc.IntType), c.astype(PETSc.IntType))
+        mat.setValuesCOO(values.ravel())
+        mat.assemble()
+        return mat
+
+    def _solve(self, n: int, B: PETSc.Mat | None, transpose: bool, unit: int = 0):
+        """For the n solutions X = A^-1 C of the columns of B^T (``transpose``) or of the unit
+        vectors of band dofs unit, unit + 1, ...: (E X, F W X) in the blocks' row order and X on
+        the band, in band order."""
+        if B is not None:
+            BT = B.transpose(PETSc.Mat())
+            indptr, indices, values = BT.getValuesCSR()
+            BT.destroy()
+            row = np.repeat(np.arange(len(indptr) - 1), np.diff(indptr))
+
+        def fill(block: npt.NDArray, c0: int, c1: int) -> None:
+            if B is not None:
+                inside = (indices >= c0) & (indices < c1)
+                block[row[inside], indices[inside] - c0] = values[inside]
+            else:
+                j = np.arange(unit + c0, unit + c1)
+                rows = self._band_zone[j]
+                mine = (rows >= self.start) & (rows < self.end)
+                block[rows[mine] - self.start, j[mine] - unit - c0] = 1.0
+
+        EX, FX, Xb = [], [], []
+
+        def consume(X: PETSc.Mat, c0: int, c1: int) -> None:
+            for mat, out in ((self._E, EX), (self._F, FX)):
+                product = mat.matMult(X)
+                out.append(
+                    self.to_block(_gather_rows(self.comm, product.getDenseArray()[:, : c1 - c0]))
+                )
+                product.destroy()
+            Xb.append(self._gather_band(X.getDenseArray()[:, : c1 - c0]))
+
+        factor = self.lu.getPC().getFactorMatrix()
+        solve_columns(factor, self.A, n, fill, consume, self.width)
+        self.solves += n
+        m = 3 * self.points
+        return (
+            np.hstack(EX) if EX else np.zeros((m, 0)),
+            np.hstack(FX) if FX else np.zeros((m, 0)),
+            np.hstack(Xb) if Xb else np.zeros((len(self.band), 0)),
+        )
+
+    # -- per pairing ----------------------------------------------------------------------------
+    def master_operator(self, dofs: npt.NDArray, values: npt.NDArray) -> scipy.sparse.csr_array:
+        """M_b (3 |points| x |band|): all points' master parts (``PointOperators.master_dofs`` and
+        ``master``, in the blocks' point order) on the band; None if a dof lies outside it."""
+        n, nd = dofs.shape
+        if n == 0:
+            return scipy.sparse.csr_array((0, len(self.band)))
+        if len(self.band) == 0:
+            return None
+        sorted_band = self.band[self._band_sort]
+        position = np.minimum(np.searchsorted(sorted_band, dofs.ravel()), len(self.band) - 1)
+        if not np.array_equal(sorted_band[position], dofs.ravel()):
+            return None
+        index = self._band_sort[position]
+        rows = np.repeat(np.arange(3 * n).reshape(n, 3), nd, axis=1)
+        cols = np.repeat(index.reshape(n, nd), 3, axis=0).reshape(n, -1)
+        return scipy.sparse.csr_array(
+            (values.reshape(n, -1).ravel(), (rows.ravel(), cols.ravel())),
+            shape=(3 * n, len(self.band)),
+        )
+
+    def matrix(self, M_b: scipy.sparse.csr_array, weight: npt.NDArray) -> npt.NDArray:
+        """G (3 |points| x 3 |points|) for the master operator M_b and the points' weights
+        w / gamma (``PointOperators.weight``, gathered) [m^3/Pa]."""
+        W = np.repeat(weight, 3)
+        G = self.Q_ss + M_b @ self.R_bs
+        G += (M_b @ self.Q_sb.T).T * W
+        G += (M_b @ (M_b @ self.Z_bb).T).T * W
+        return G
+
+    # -- per iteration --------------------------------------------------------------------------
+    def solve(self, rhs: PETSc.Vec, out: PETSc.Vec) -> None:
+        """out = A^-1 rhs (zone vectors)."""
+        self.lu.solve(rhs, out)
+
+    def apply_E(self, d: PETSc.Vec, M_b: scipy.sparse.csr_array) -> npt.NDArray:
+        """E d (3 |points|, on every rank) of a zone vector d."""
+        if self.points == 0:
+            return np.zeros(0)
+        y = self._E.createVecLeft()
+        self._E.mult(d, y)
+        Ed = self.to_block(_gather_rows(self.comm, y.array_r))
+        y.destroy()
+        return Ed + M_b @ self._gather_band(d.array_r)
+
+    def load(
+        self, v: npt.NDArray, M_b: scipy.sparse.csr_array, weight: npt.NDArray, out: PETSc.Vec
+    ) -> None:
+        """out = F^T W v (zone vector) [N] of tractions v (3 |points|, the same on every rank) [Pa]
+        with the points' weights w / gamma [m^3/Pa]."""
+        if self.points == 0:
+            out.set(0.0)
+            return
+        x = self._F.createVecLeft()
+        first = x.getOwnershipRange()[0]
+        x.array[:] = v[self._to_block[first : first + x.getLocalSize()]]
+        self._F.multTranspose(x, out)
+        x.destroy()
+        master = M_b.T @ (np.repeat(weight, 3) * v)
+        out.array[self._band_local] += master[self._band_owned]
+
+    def destroy(self) -> None:
+        for obj in (self.lu, self._E, self._F):
+            if obj is not None:
+                obj.destroy()

@@ -1,0 +1,412 @@
+"""Newton on the contact points for A u + r_c(u) = b: the nonsmooth contact law is solved in the
+trial tractions of the points that can touch, the linear rest held in fixed LU factors
+(docs/dynamics.md, "Newton on the contact points").
+
+With the pairing, the normals and the friction coefficients frozen at the iterate u_k, the
+Nitsche residual (``solver.contact.nitsche``) is a linear part at every paired point plus, at
+the candidate points C that can touch, F^T W lambda(P) with the multipliers lambda of the
+pointwise law (``solver.contact.law``) of the trial tractions P = P_k + E (u - u_k). With A'
+the linear operator (A and the linear Nitsche part, factorised once per A), the correction
+delta from u_k solves
+
+    R_k + A' delta + F^T W (lambda(P_k + E delta) - lambda_k) = 0,
+
+that is, in the candidates' trial tractions y = P_k + E delta (3 |C| unknowns),
+
+    y - y_free + G lambda(y) = 0,   G = E A'^-1 F^T W,   y_free = P_k - E A'^-1 R_k + G lambda_k,
+
+with the dense compliance G of ``solver.dynamics.compliance``. A semismooth Newton method with a
+line search solves it (:func:`solve_tractions`); then delta = -A'^-1 (R_k + F^T W (lambda(y) -
+lambda_k)). The outer iteration repeats with the true residual R (new pairing and normals)
+until ||R|| meets the tolerance. The stick-slip-open transitions are resolved in the small
+dense problem, so the outer iteration converges in one or two iterations. A point outside C
+that comes into contact, or a pairing that leaves the master band, extends C or the band and
+recomputes the compliance blocks.
+"""
+
+import time
+from dataclasses import dataclass
+
+import numpy as np
+import numpy.typing as npt
+import scipy.linalg
+from mpi4py import MPI
+from petsc4py import PETSc
+
+import dolfinx
+
+from solver.contact.law import derivative, multipliers
+from solver.contact.model import Status
+from solver.contact.nitsche import NitscheContact
+from solver.dynamics.compliance import ContactCompliance
+from solver.dynamics.newton import NewtonResult, contact_residual, dirichlet_rows
+
+__all__ = ["PointNewtonSolver", "TractionSolution", "solve_tractions"]
+
+
+@dataclass
+class TractionSolution:
+    """Outcome of :func:`solve_tractions`: the trial tractions y [Pa], the multipliers
+    lambda(y) [Pa] (both 3 per point), the iterations and whether ||Phi|| met the tolerance."""
+
+    y: npt.NDArray
+    multipliers: npt.NDArray
+    iterations: int
+    converged: bool
+
+
+def _law(y: npt.NDArray, normal: npt.NDArray, mu: npt.NDArray):
+    """The pointwise law at trial tractions y (3 per point): P_t and the multipliers."""
+    P = y.reshape(-1, 3)
+    P_n = np.einsum("pi,pi->p", P, normal)
+    P_t = P - P_n[:, None] * normal
+    return P_t, multipliers(P_n, P_t, mu)
+
+
+def solve_tractions(
+    G: npt.NDArray,
+    y_free: npt.NDArray,
+    y0: npt.NDArray,
+    normal: npt.NDArray,
+    mu: npt.NDArray,
+    rtol: float = 1e-12,
+    max_iterations: int = 60,
+    max_backtracks: int = 12,
+    factors: dict | None = None,
+) -> TractionSolution:
+    """Solve Phi(y) = y - y_free + G lambda(y) = 0 for the trial tractions y [Pa] of points with
+    normals ``normal`` (np, 3) and friction coefficients ``mu`` (np,), from y0.
+
+    Semismooth Newton: (I + G D) dy = -Phi with D = d lambda / d y (``solver.contact.law``), whose
+    columns vanish at open points, so that only the active points' block is factorised; the step
+    is halved while ||Phi|| does not decrease. Converged when ||Phi|| <= rtol max(||y_free||,
+    ||y||) (infinity norms). ``factors``: a dict kept by the caller between calls with the same
+    G; the first iteration reuses the LU factors of the last call's last iteration when the
+    points' states (open, stick, slip) are the same.
+    """
+    y = y0.copy()
+    P_t, lam = _law(y, normal, mu)
+    lam_y = lam.vector(normal).ravel()
+    phi = y - y_free + G @ lam_y
+    norm = float(np.linalg.norm(phi))
+    scale = max(np.abs(y_free).max(initial=0.0), np.abs(y).max(initial=0.0), 1.0)
+    G_t = None  # (active points, G^T on them): kept while the active set does not change
+    for iteration in range(max_iterations + 1):
+        if np.abs(phi).max(initial=0.0) <= rtol * scale:
+            return TractionSolution(y, lam_y, iteration, True)
+        if iteration == max_iterations:
+            break
+        active = np.flatnonzero(lam.active)
+        dy = -phi
+        if active.size:
+            D = derivative(
+                normal[active],
+                P_t[active],
+                mu[active],
+                -lam.normal[active],
+                lam.stick[active],
+                lam.slip[active],
+            )
+            cols = (3 * active[:, None] + np.arange(3)).ravel()
+            states = np.where(lam.stick, 1, 0) + np.where(lam.slip, 2, 0)
+            if iteration == 0 and factors and np.array_equal(factors["states"], states):
+                lu = factors["lu"]
+            else:
+                if G_t is None or not np.array_equal(G_t[0], active):
+                    G_t = (active, G.T[np.ix_(cols, cols)].reshape(len(active), 3, len(cols)))
+                # J^T = D^T G_aa^T block row by block row; J = I + G_aa D in Fortran order
+                J = (D.transpose(0, 2, 1) @ G_t[1]).reshape(len(cols), len(cols)).T
+                J[np.diag_indices_from(J)] += 1.0
+                J[np.abs(J) < 1e-20] = 0.0  # no subnormal numbers in single precision: slow
+                lu = scipy.linalg.lu_factor(
+                    J.astype(np.float32, order="F"), overwrite_a=True, check_finite=False
+                )
+                if factors is not None:
+                    factors.update(states=states, lu=lu)
+            dy_a = scipy.linalg.lu_solve(lu, -phi[cols].astype(np.float32), check_finite=False)
+            dy_a = dy_a.astype(float)
+            w = np.zeros_like(y)  # D dy at the active points
+            w[cols] = (D @ dy_a.reshape(-1, 3, 1)).ravel()
+            dy = -phi - G @ w
+            dy[cols] = dy_a
+        alpha, accepted = 1.0, False
+        for _ in range(max_backtracks + 1):
+            trial = y + alpha * dy
+            P_t_trial, lam_trial = _law(trial, normal, mu)
+            lam_trial_y = lam_trial.vector(normal).ravel()
+            phi_trial = trial - y_free + G @ lam_trial_y
+            norm_trial = float(np.linalg.norm(phi_trial))
+            if norm_trial < (1.0 - 1e-4 * alpha) * norm:
+                accepted = True
+                break
+            alpha *= 0.5
+        if not accepted:
+            break
+        y, P_t, lam, lam_y, phi, norm = (
+            trial,
+            P_t_trial,
+            lam_trial,
+            lam_trial_y,
+            phi_trial,
+            norm_trial,
+        )
+    return TractionSolution(y, lam_y, iteration, False)
+
+
+class PointNewtonSolver:
+    """Newton on the contact points for A u + r_c(u) = b (module docstring).
+
+    Args:
+        A: bulk operator with Dirichlet rows/columns as identities (with a ``zone``: identity rows
+            off it, ``solver.dynamics.condensation``), constant while this solver is used.
+        bcs: Dirichlet conditions of the problem.
+        zone: global dofs (this rank's part) of the block that the contact acts on; None: all.
+        rtol, atol, max_iterations: convergence of the outer iteration, as in
+            ``solver.dynamics.newton.ContactNewtonSolver``.
+        lu_solver: PETSc factorisation package of A'.
+        candidate_gap: points within this gap of the master [m] (and all points of their slave
+            facets) are candidates; points outside that come into contact are added.
+        traction_rtol, traction_iterations: tolerance and iteration limit of the inner problem.
+        pairing_rtol: G is recomputed when the candidates' master parts moved by more than this
+            fraction since it was (or a candidate paired with another master facet).
+    """
+
+    def __init__(
+        self,
+        A: PETSc.Mat,
+        bcs: list[dolfinx.fem.DirichletBC],
+        zone: PETSc.IS | None = None,
+        rtol: float = 1e-7,
+        atol: float = 1e-12,
+        max_iterations: int = 12,
+        lu_solver: str = "mumps",
+        candidate_gap: float = 2e-6,
+        traction_rtol: float = 1e-12,
+        traction_iterations: int = 60,
+        pairing_rtol: float = 1e-3,
+    ):
+        if max_iterations < 1:
+            raise ValueError(f"max_iterations must be >= 1, got {max_iterations}")
+        if not (rtol > 0 and atol >= 0 and traction_rtol > 0):
+            raise ValueError("tolerances must be positive (atol >= 0)")
+        if not candidate_gap >= 0:
+            raise ValueError(f"candidate_gap must be >= 0 m, got {candidate_gap}")
+        self.A, self.bcs = A, bcs
+        self.rtol, self.atol, self.max_iterations = rtol, atol, max_iterations
+        self.lu_solver = lu_solver
+        self.candidate_gap = candidate_gap
+        self.traction_rtol, self.traction_iterations = traction_rtol, traction_iterations
+        self._comm: MPI.Comm = A.getComm().tompi4py()
+        self._bc_rows, self._bc_local = dirichlet_rows(bcs)
+        start, end = A.getOwnershipRange()
+        self._zone = zone if zone is not None else PETSc.IS().createStride(end - start, start, 1)
+        self._zone_local = self._zone.getIndices() - start
+        self._compliance: ContactCompliance | None = None
+        self._G, self._G_master, self._factors = None, None, {}
+        self.pairing_rtol = pairing_rtol
+        self._candidates = np.zeros(0, dtype=np.int64)  # this rank's candidate points
+        self.factorizations = 0  #: LU factorisations of A'
+        self.builds = 0  #: extensions of the compliance blocks
+
+    def set_operator(self, A: PETSc.Mat) -> None:
+        """A has new values (another time step): A' is factorised and the blocks rebuilt at the
+        next solve."""
+        self.A = A
+        self._drop()
+
+    def _drop(self) -> None:
+        if self._compliance is not None:
+            self._compliance.A.destroy()
+            self._compliance.destroy()
+        self._compliance = None
+
+    # -- the linear operator A' and the compliance blocks ------------------------------------------
+    def _factorise(self, contact: NitscheContact) -> None:
+        """A' = A + the linear Nitsche part at every paired point, on the zone, factorised."""
+        J = contact.interface_stiffness(Status.OPEN)
+        J.zeroRows(self._bc_rows, diag=0.0)
+        # summed at full size: PETSc's MatAXPY of two parallel submatrices whose off-process
+        # columns differ fails ("Non conforming matrix add")
+        full = self.A.copy()
+        full.axpy(1.0, J, PETSc.Mat.Structure.DIFFERENT_NONZERO_PATTERN)
+        A_prime = full.createSubMatrix(self._zone, self._zone)
+        full.destroy()
+        zone_dofs = np.concatenate(self._comm.allgather(self._zone.getIndices()))
+        self._compliance = ContactCompliance(A_prime, zone_dofs, self.lu_solver)
+        self._candidates = np.zeros(0, dtype=np.int64)
+        self.factorizations += 1
+
+    def _update_points(self, contact: NitscheContact) -> None:
+        """Extend the candidates and the master band where needed (collective): by the slave facets
+        of this rank with a paired point within ``candidate_gap`` of the master or in contact, and
+        by the dofs of the master facets the candidates pair with. A candidate that lost its
+        partner restarts the blocks."""
+        trial = contact.trial_tractions()
+        P_n = np.einsum("pi,pi->p", trial.traction, trial.normal)
+        near = trial.paired & ((contact.state.gap <= self.candidate_gap) | (P_n <= 0))
+        nq = contact.slave.points_per_facet
+        facets = np.unique(np.flatnonzero(near) // nq)
+        points = (facets[:, None] * nq + np.arange(nq)).ravel()
+        points = points[trial.paired[points]]
+        compliance = self._compliance
+        if self._comm.allreduce(bool(np.any(~trial.paired[self._candidates])), op=MPI.LOR):
+            compliance.reset()
+            self._candidates = np.zeros(0, dtype=np.int64)
+        new = np.setdiff1d(points, self._candidates)
+        candidates = np.concatenate([self._candidates, new])
+        paired = np.unique(contact.pairing.facet[candidates])
+        paired = np.unique(np.concatenate(self._comm.allgather(paired)))
+        nodes = np.unique(contact.master.blocks[paired])
+        band = np.setdiff1d((nodes[:, None] * 3 + np.arange(3)).ravel(), compliance.band)
+        if self._comm.allreduce(len(new), op=MPI.SUM) or len(band):
+            compliance.extend(contact.point_operators(candidates), len(new), band)
+            self._candidates = candidates
+            self._G_master = None
+            self.builds += 1
+
+    def _gather_points(self, contact: NitscheContact):
+        """The candidates' trial tractions, normals, friction coefficients and weights (in the
+        compliance blocks' order), their master operator on the band and its dofs and values."""
+        comm, points = self._comm, self._candidates
+        ops = contact.point_operators(points)
+        trial = contact.trial_tractions()
+
+        def gather(a):
+            return self._compliance.points_to_block(
+                np.concatenate(comm.allgather(np.ascontiguousarray(a)))
+            )
+
+        master_dofs, master = gather(ops.master_dofs), gather(ops.master)
+        return (
+            gather(trial.traction[points]).ravel(),
+            gather(trial.normal[points]),
+            gather(trial.mu[points]),
+            gather(ops.weight),
+            self._compliance.master_operator(master_dofs, master),
+            (master_dofs, master),
+        )
+
+    def _compliance_matrix(self, M_b, weight, master) -> npt.NDArray:
+        """G at the present pairing: the last one while no candidate changed its master facet and
+        the master parts moved by at most ``pairing_rtol`` of their size (G is the Jacobian of
+        the inner problem; the residuals use the present pairing)."""
+        kept = self._G_master
+        if kept is not None and np.array_equal(kept[0], master[0]):
+            change = np.abs(master[1] - kept[1]).max(initial=0.0)
+            if change <= self.pairing_rtol * np.abs(kept[1]).max(initial=0.0):
+                return self._G
+        self._G = self._compliance.matrix(M_b, weight)
+        self._G_master = master
+        self._factors = {}
+        return self._G
+
+    def solve(
+        self,
+        b: PETSc.Vec,
+        contact: NitscheContact,
+        u: dolfinx.fem.Function,
+        load_norm: float | None = None,
+    ) -> NewtonResult:
+        """Solve A u + r_c(u) = b for u (initial guess: u on entry, Dirichlet values imposed);
+        ``load_norm`` as in ``ContactNewtonSolver.solve``."""
+        for bc in self.bcs:
+            bc.set(u.x.array)
+        u.x.scatter_forward()
+        x = u.x.petsc_vec
+        F, linear, delta = x.duplicate(), x.duplicate(), x.duplicate()
+        self.A.mult(x, linear)
+        linear.axpy(-1.0, b)
+        timings = {"factorise": 0.0, "compliance": 0.0, "tractions": 0.0, "contact": 0.0}
+        t0 = time.perf_counter()
+        norm = contact_residual(
+            linear, contact, u, F, self._bc_local, update=not contact.updated_at(u)
+        )
+        timings["contact"] += time.perf_counter() - t0
+        if self._compliance is None:
+            t0 = time.perf_counter()
+            self._factorise(contact)
+            timings["factorise"] += time.perf_counter() - t0
+        compliance = self._compliance
+        r_zone, d_zone, v_zone = (compliance.A.createVecLeft() for _ in range(3))
+        b_norm = b.norm() if load_norm is None else load_norm
+        norms, inner, result = [], [], None
+        factorizations0 = self.factorizations
+        for k in range(self.max_iterations + 1):
+            norms.append(norm)
+            if not np.isfinite(norm):
+                result = NewtonResult(
+                    False, k, norms, message=f"residual is not finite at iteration {k}"
+                )
+                break
+            tol = max(self.atol, self.rtol * max(norms[0], b_norm), contact.residual_floor())
+            if norm <= tol:
+                result = NewtonResult(True, k, norms)
+                break
+            if k == self.max_iterations:
+                result = NewtonResult(
+                    False,
+                    k,
+                    norms,
+                    message=f"no convergence in {k} iterations (||F|| = {norm:.3e} N)",
+                )
+                break
+            t0 = time.perf_counter()
+            self._update_points(contact)
+            y_k, normal, mu, weight, M_b, master = self._gather_points(contact)
+            G = self._compliance_matrix(M_b, weight, master)
+            r_zone.array[:] = F.array_r[self._zone_local]
+            compliance.solve(r_zone, d_zone)
+            timings["compliance"] += time.perf_counter() - t0
+            t0 = time.perf_counter()
+            _, lam_k = _law(y_k, normal, mu)
+            lam_k = lam_k.vector(normal).ravel()
+            y_free = y_k - compliance.apply_E(d_zone, M_b) + G @ lam_k
+            # from the iterate's tractions; if that fails (e.g. every point open, where the first
+            # step closes them all at once), from y_free (the tractions if the multipliers kept
+            # their values)
+            for y0 in (y_k, y_free):
+                solution = solve_tractions(
+                    G,
+                    y_free,
+                    y0,
+                    normal,
+                    mu,
+                    self.traction_rtol,
+                    self.traction_iterations,
+                    factors=self._factors,
+                )
+                if solution.converged:
+                    break
+            inner.append(solution.iterations)
+            timings["tractions"] += time.perf_counter() - t0
+            if not solution.converged:
+                result = NewtonResult(
+                    False,
+                    k,
+                    norms,
+                    message=f"contact tractions did not converge in {solution.iterations} "
+                    f"iterations at Newton iteration {k}",
+                )
+                break
+            t0 = time.perf_counter()
+            compliance.load(solution.multipliers - lam_k, M_b, weight, v_zone)
+            v_zone.axpy(1.0, r_zone)
+            compliance.solve(v_zone, d_zone)
+            delta.set(0.0)
+            delta.array[self._zone_local] = -d_zone.array_r
+            x.axpy(1.0, delta)
+            u.x.scatter_forward()
+            self.A.multAdd(delta, linear, linear)
+            timings["compliance"] += time.perf_counter() - t0
+            t0 = time.perf_counter()
+            norm = contact_residual(linear, contact, u, F, self._bc_local)
+            timings["contact"] += time.perf_counter() - t0
+        for vec in (F, linear, delta, r_zone, d_zone, v_zone):
+            vec.destroy()
+        result.factorizations = self.factorizations - factorizations0
+        result.timings = timings
+        result.linear_iterations = inner
+        return result
+
+    def destroy(self) -> None:
+        self._drop()

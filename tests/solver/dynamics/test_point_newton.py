@@ -1,0 +1,146 @@
+"""Newton on the contact points (solver/dynamics/point_newton.py, solver/dynamics/compliance.py).
+
+- The inner problem y - y_free + G lambda(y) = 0 for uncoupled points (G = g I per point) against
+  its closed form (open, stick, slip).
+- The compliance G of ``ContactCompliance`` (blocks once per operator, the master part per
+  pairing) against E A'^-1 F^T W formed densely on the tiny joint's condensed zone.
+- The installation steps of the quick frictional joint (self-weight ramp, then eccentric
+  vibration steps) with ``[contact] solver = "points"`` against the generalized Newton on the
+  zone: the same discrete problem, so the same settlement and displacement to the Newton
+  tolerance.
+
+Serially and on 2 ranks.
+"""
+
+import numpy as np
+import pytest
+from mpi4py import MPI
+from petsc4py import PETSc
+
+from solver.contact.model import Status
+from solver.dynamics.compliance import ContactCompliance
+from solver.dynamics.loads import Schedule
+from solver.dynamics.point_newton import solve_tractions
+from solver.dynamics.time_loop import run
+from solver.installation.model import attach_vibration, set_up_joint_model
+
+pytestmark = pytest.mark.mpi
+
+
+def _closed_form(y_free, g, normal, mu):
+    """Solution of y - y_free + g lambda(y) = 0 at one point (G = g I)."""
+    f_n = y_free @ normal
+    f_t = y_free - f_n * normal
+    if f_n > 0:
+        return y_free.copy()  # open: no multiplier
+    y_n = f_n / (1 + g)  # lambda_n = y_n
+    pressure = -y_n
+    if np.linalg.norm(f_t) / (1 + g) <= mu * pressure:
+        return y_n * normal + f_t / (1 + g)  # stick: lambda_t = y_t
+    q = f_t / np.linalg.norm(f_t)  # slip: y_t + g mu p q = f_t
+    return y_n * normal + (np.linalg.norm(f_t) - g * mu * pressure) * q
+
+
+def test_uncoupled_points_against_closed_form():
+    rng = np.random.default_rng(7)
+    n = 60
+    normal = rng.normal(size=(n, 3))
+    normal /= np.linalg.norm(normal, axis=1)[:, None]
+    g = rng.uniform(1.0, 300.0, n)  # the joint's compliances are of this size
+    mu = rng.uniform(0.05, 0.5, n)
+    y_free = 1e7 * rng.normal(size=(n, 3))  # [Pa]
+    G = np.kron(np.diag(g), np.eye(3))
+    solution = solve_tractions(G, y_free.ravel(), np.zeros(3 * n), normal, mu)
+    assert solution.converged
+    expected = np.array([_closed_form(y_free[p], g[p], normal[p], mu[p]) for p in range(n)])
+    assert np.allclose(solution.y.reshape(-1, 3), expected, rtol=1e-10, atol=1e-3)
+    states = [_closed_form(y_free[p], g[p], normal[p], mu[p]) @ normal[p] < 0 for p in range(n)]
+    assert 0 < sum(states) < n  # open and closed points both tested
+
+
+def _gather_rows(local: np.ndarray) -> np.ndarray:
+    return np.concatenate(MPI.COMM_WORLD.allgather(local))
+
+
+def test_compliance_against_dense_product(tiny_case):
+    """G = E A'^-1 F^T W of points on the tiny joint's contact surface, from the blocks of
+    ContactCompliance and formed densely (E, F, A' gathered)."""
+    comm = MPI.COMM_WORLD
+    model = set_up_joint_model(comm, tiny_case())
+    problem, contact = model.problem, model.contact
+    problem._assemble_operator(1e-4)  # the condensed operator at a step of 0.1 ms
+    condensation = problem._condensation
+    A = condensation.A_hat
+    zone = condensation.zone
+    J = contact.interface_stiffness(Status.OPEN)
+    A_prime = A.copy()
+    A_prime.axpy(1.0, J, structure=PETSc.Mat.Structure.DIFFERENT_NONZERO_PATTERN)
+    A_zone = A_prime.createSubMatrix(zone, zone)
+    zone_dofs = np.concatenate(comm.allgather(zone.getIndices()))
+    compliance = ContactCompliance(A_zone, zone_dofs, "mumps")
+    paired = np.flatnonzero(contact.pairing.paired)
+    points = paired[:: max(1, len(paired) // 40)]  # a few dozen points per rank
+    ops = contact.point_operators(points)
+    band = np.unique(_gather_rows(ops.master_dofs.ravel()))
+    compliance.extend(ops, len(points), band)
+    M_b = compliance.master_operator(_gather_rows(ops.master_dofs), _gather_rows(ops.master))
+    G = compliance.matrix(M_b, _gather_rows(ops.weight))
+
+    # dense reference over the zone
+    n_zone = len(zone_dofs)
+    A_dense = _gather_rows(A_zone.convert("dense").getDenseArray())
+    column = {int(d): i for i, d in enumerate(zone_dofs)}
+
+    def dense_rows(dofs, values):
+        rows = np.zeros((3 * len(dofs), n_zone))
+        for p in range(len(dofs)):
+            for c, dof in enumerate(dofs[p]):
+                rows[3 * p : 3 * p + 3, column[int(dof)]] += values[p, :, c]
+        return rows
+
+    E = dense_rows(ops.slave_dofs, ops.E_slave) + dense_rows(ops.master_dofs, ops.master)
+    F = dense_rows(ops.slave_dofs, ops.F_slave) + dense_rows(ops.master_dofs, ops.master)
+    E, F = _gather_rows(E), _gather_rows(F)
+    W = np.repeat(_gather_rows(ops.weight), 3)
+    reference = E @ np.linalg.solve(A_dense, F.T * W)
+    assert G.shape == reference.shape == (3 * compliance.points, 3 * compliance.points)
+    assert np.abs(G - reference).max() <= 1e-8 * np.abs(reference).max()
+    compliance.destroy()
+
+
+def _installation_steps(case, vibration_steps: int) -> tuple[float, np.ndarray, list[int]]:
+    """The quick joint's self-weight ramp and ``vibration_steps`` steps of the 120 Hz eccentric
+    stage: settlement [mm], the displacement (gathered) [m] and the iterations of each step."""
+    comm = MPI.COMM_WORLD
+    model = set_up_joint_model(comm, case)
+    problem, sw = model.problem, case.self_weight
+    iterations = []
+
+    def record(p):
+        iterations.append(p.last_result.iterations)
+        return {}
+
+    run(problem, sw.ramp_time_s, sw.dt_s, observers=[record], progress=False)
+    dt = 1.0 / (120.0 * 16)
+    stage = case.vibration.stage(vibration_steps * dt, 120.0, "eccentric")
+    attach_vibration(model, Schedule([stage], start_s=problem.t))
+    problem.set_scheme(case.vibration_scheme())
+    run(problem, problem.t + vibration_steps * dt, dt, observers=[record], progress=False)
+    assert problem.failed_steps == 0
+    u = problem.u.x.petsc_vec
+    order = np.concatenate(comm.allgather(np.arange(*u.getOwnershipRange())))
+    values = _gather_rows(u.array_r.copy())
+    return model.settlement(problem)["settlement_mm"], values[np.argsort(order)], iterations
+
+
+def test_points_solver_matches_zone_newton(quick_case):
+    overrides = ("contact.lu_solver=mumps", "time.steps_per_period=16")
+    zone = _installation_steps(quick_case(*overrides), 8)
+    points = _installation_steps(quick_case(*overrides, 'contact.solver="points"'), 8)
+    print(
+        f"\nsettlement: zone Newton {zone[0]:.9f} mm ({zone[2]} iterations), "
+        f"points {points[0]:.9f} mm ({points[2]} iterations)"
+    )
+    assert zone[0] > 0.1
+    assert points[0] == pytest.approx(zone[0], rel=1e-6)
+    assert np.linalg.norm(points[1] - zone[1]) <= 1e-6 * np.linalg.norm(zone[1])
