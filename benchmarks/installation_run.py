@@ -4,9 +4,9 @@ Runs the installation pipeline of a case (default: ``cases/scaled.toml``, the co
 with the reference sequence, ``demos/install.py --full``) with the phase timer of
 ``benchmarks/phase_timer.py`` and prints, per
 time-stepping stage: steps, wall time, s/step, Newton iterations and GMRES iterations per
-step, factorisations, step cuts, the mean time of one triangular solve with the contact zone's
-LU factors and the ratio (time per step) / (one triangular solve), then the phase breakdown of
-the stage's steps. The last lines are a table of the whole run.
+step (or the contact points' traction iterations per step), factorisations, step cuts, the mean
+time of one triangular solve with the contact zone's LU factors and the ratio (time per step) /
+(one triangular solve), then the phase breakdown of the stage's steps. The last lines are a table of the whole run.
 
     mpirun -n 2 python benchmarks/installation_run.py                 # cases/scaled.toml
     mpirun -n 2 python benchmarks/installation_run.py --case scaled_full
@@ -57,6 +57,7 @@ class StageProfile:
                 "s_per_step": wall / max(steps, 1),
                 "newton_per_step": data["newton_iterations_mean"],
                 "gmres_per_step": self.timer.gmres / max(steps, 1),
+                "tractions_per_step": self.timer.traction_iterations / max(steps, 1),
                 "factorisations": self.timer.calls.get("factorisation", 0),
                 "step_cuts": data["step_cuts"],
                 "solve_ms": 1e3 * solve,
@@ -65,7 +66,8 @@ class StageProfile:
             self.rows.append(row)
             self.say(
                 f"{row['phase']}: {steps} steps in {wall:.1f} s ({row['s_per_step']:.3f} s/step), Newton "
-                f"{row['newton_per_step']:.2f}/step, GMRES {row['gmres_per_step']:.1f}/step, "
+                f"{row['newton_per_step']:.2f}/step, GMRES {row['gmres_per_step']:.1f}/step, traction "
+                f"iterations {row['tractions_per_step']:.1f}/step, "
                 f"{row['factorisations']} factorisations, {row['step_cuts']} step cuts; one triangular "
                 f"solve {row['solve_ms']:.1f} ms, step / solve = {row['ratio']:.1f}",
                 flush=True,
@@ -74,21 +76,22 @@ class StageProfile:
 
     def table(self, setup_s: float, total_s: float) -> None:
         self.say(
-            "\n| phase | wall [s] | steps | s/step | Newton/step | GMRES/step | factorisations | step cuts "
-            "| triangular solve [ms] | step / solve |"
+            "\n| phase | wall [s] | steps | s/step | Newton/step | GMRES/step | traction iterations/step "
+            "| factorisations | step cuts | triangular solve [ms] | step / solve |"
         )
-        self.say("|---|---|---|---|---|---|---|---|---|---|")
-        self.say(f"| set-up | {setup_s:.1f} | | | | | | | | |")
+        self.say("|---|---|---|---|---|---|---|---|---|---|---|")
+        self.say(f"| set-up | {setup_s:.1f} | | | | | | | | | |")
         for r in self.rows:
             if "steps" not in r:
-                self.say(f"| {r['phase']} | {r['wall_s']:.1f} | | | | | | | | |")
+                self.say(f"| {r['phase']} | {r['wall_s']:.1f} | | | | | | | | | |")
                 continue
             self.say(
                 f"| {r['phase']} | {r['wall_s']:.1f} | {r['steps']} | {r['s_per_step']:.3f} | "
-                f"{r['newton_per_step']:.2f} | {r['gmres_per_step']:.1f} | {r['factorisations']} | "
+                f"{r['newton_per_step']:.2f} | {r['gmres_per_step']:.1f} | "
+                f"{r['tractions_per_step']:.1f} | {r['factorisations']} | "
                 f"{r['step_cuts']} | {r['solve_ms']:.1f} | {r['ratio']:.1f} |"
             )
-        self.say(f"| **total** | **{total_s:.1f}** ({total_s / 60:.1f} min) | | | | | | | | |")
+        self.say(f"| **total** | **{total_s:.1f}** ({total_s / 60:.1f} min) | | | | | | | | | |")
 
 
 def main(argv=None) -> int:

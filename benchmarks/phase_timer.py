@@ -8,10 +8,15 @@ time (a phase nested in another is not counted twice) per phase:
     contact update     NitscheContact.update without the pairing (state at the iterate)
     contact residual   NitscheContact.residual
     contact jacobian   NitscheContact.jacobian (+ Dirichlet row zeroing, copy into A + J)
-    factorisation      FactorStore.factorise (A + J_c copy and LU)
-    triangular solves  BlockLU.apply: one forward and back solve with the LU factors of A + J_c
+    factorisation      FactorStore.factorise (A + J_c copy and LU); with the contact-point solver
+                       PointNewtonSolver._factorise (the LU of A')
+    triangular solves  one forward and back solve with the contact zone's LU factors:
+                       BlockLU.apply (of A + J_c), ContactCompliance.solve (of A')
     linear solves      ContactNewtonSolver._correction without factorisation and triangular solves
                        (GMRES, products with the interface matrices)
+    compliance         ContactCompliance.extend (the columns A'^-1 [F^T W, E^T, I_b] of new
+                       contact points and master dofs) and ContactCompliance.matrix (G per pairing)
+    tractions          solve_tractions: the semismooth Newton of the contact points' tractions
     condensation       solver.dynamics.condensation.BulkCondensation: building and updating it (once
                        per step size), the condensed load and the recovery of the bulk (one bulk solve
                        each per step)
@@ -32,6 +37,7 @@ import solver.dynamics.elastodynamics
 import solver.dynamics.factor_store
 import solver.dynamics.linear_algebra
 import solver.dynamics.newton
+import solver.dynamics.point_newton
 
 PHASES = [
     "pairing",
@@ -41,6 +47,8 @@ PHASES = [
     "factorisation",
     "triangular solves",
     "linear solves",
+    "compliance",
+    "tractions",
     "condensation",
     "bulk vectors",
     "other",
@@ -54,7 +62,8 @@ class PhaseTimer:
         self.totals: dict[str, float] = defaultdict(float)
         self.cpu: dict[str, float] = defaultdict(float)  #: process CPU time per phase [s]
         self.calls: dict[str, int] = defaultdict(int)
-        self.gmres = 0  #: GMRES iterations
+        self.gmres = 0  #: GMRES iterations (generalized Newton on the zone)
+        self.traction_iterations = 0  #: semismooth iterations (Newton on the contact points)
         self._stack: list[
             list
         ] = []  # [phase, start, cpu start, wall and cpu time spent in nested phases]
@@ -99,25 +108,33 @@ class PhaseTimer:
         self._wrap(solver.dynamics.factor_store.FactorStore, "factorise", "factorisation")
         self._wrap(CN, "_correction", "linear solves")
         self._wrap(solver.dynamics.linear_algebra.BlockLU, "apply", "triangular solves")
+        PN = solver.dynamics.point_newton
+        self._wrap(PN.PointNewtonSolver, "_factorise", "factorisation")
+        self._wrap(PN.ContactCompliance, "solve", "triangular solves")
+        for name in ("extend", "matrix"):
+            self._wrap(PN.ContactCompliance, name, "compliance")
+        self._wrap(PN, "solve_tractions", "tractions")
         for name in ("__init__", "update", "reduce_load", "recover"):
             self._wrap(solver.dynamics.condensation.BulkCondensation, name, "condensation")
         for name in ("_effective_load", "_evaluate_load", "_assemble_operator"):
             self._wrap(ED, name, "bulk vectors")
-        self._count_gmres(CN)
+        self._count(CN, "gmres")
+        self._count(PN.PointNewtonSolver, "traction_iterations")
         return self
 
-    def _count_gmres(self, CN) -> None:
-        """Count GMRES iterations of the Newton corrections (NewtonResult.linear_iterations)."""
-        original = CN.solve
+    def _count(self, solver_class, counter: str) -> None:
+        """Add the inner iterations of ``solver_class.solve`` (NewtonResult.linear_iterations:
+        GMRES iterations, or the contact points' semismooth iterations) to ``counter``."""
+        original = solver_class.solve
 
         @functools.wraps(original)
         def counted(*args, **kwargs):
             result = original(*args, **kwargs)
-            self.gmres += sum(result.linear_iterations)
+            setattr(self, counter, getattr(self, counter) + sum(result.linear_iterations))
             return result
 
-        CN.solve = counted
-        self._undo.append((CN, "solve", original))
+        solver_class.solve = counted
+        self._undo.append((solver_class, "solve", original))
 
     def uninstall(self) -> None:
         for owner, name, original in reversed(self._undo):
@@ -129,6 +146,7 @@ class PhaseTimer:
         self.cpu.clear()
         self.calls.clear()
         self.gmres = 0
+        self.traction_iterations = 0
 
     def triangular_solve_s(self) -> float:
         """Mean wall time of one application of the LU factors (forward and back solve) [s]."""
@@ -144,7 +162,7 @@ class PhaseTimer:
         n, its = max(steps, 1), max(iterations, 1)
         say(
             f"  phase breakdown (rank 0, {steps} steps, {iterations} Newton iterations, {self.gmres} GMRES "
-            f"iterations, {self.calls.get('factorisation', 0)} factorisations; "
+            f"and {self.traction_iterations} traction iterations, {self.calls.get('factorisation', 0)} factorisations; "
             f"slowest rank {max(sum(t.values()) for t in per_rank) / n:.3f} s/step):"
         )
         for phase in PHASES:

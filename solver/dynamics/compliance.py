@@ -21,14 +21,53 @@ blocks are held on every rank; the points are ordered rank by rank, three rows p
 
 import numpy as np
 import numpy.typing as npt
-import scipy.sparse
 from mpi4py import MPI
 from petsc4py import PETSc
 
 from solver.contact.nitsche import PointOperators
 from solver.dynamics.linear_algebra import direct_solver, solve_columns
 
-__all__ = ["ContactCompliance"]
+__all__ = ["ContactCompliance", "MasterOperator"]
+
+
+class MasterOperator:
+    """The points' master parts on the band, M_b (3 |points| x |band|): each point's 3 rows act on
+    the 3 x 9 dofs of its paired master facet. Products are taken facet by facet (the points
+    paired with one facet share its dofs) as dense matrix products.
+
+    Args:
+        index: band positions of each point's master dofs (np, nd).
+        values: each point's master part (np, 3, nd) [Pa/m].
+        band: the band's size.
+    """
+
+    def __init__(self, index: npt.NDArray, values: npt.NDArray, band: int):
+        self.shape = (3 * len(index), band)
+        order = np.lexsort(index.T[::-1]) if len(index) else np.zeros(0, dtype=np.int64)
+        key = index[order]
+        starts = (
+            np.flatnonzero(np.r_[True, np.any(key[1:] != key[:-1], axis=1)]) if len(key) else []
+        )
+        bounds = np.r_[starts, len(key)]
+        self.groups = []  # (rows of the group's points, their band columns, the dense block)
+        for a, b in zip(bounds[:-1], bounds[1:]):
+            points = order[a:b]
+            rows = (3 * points[:, None] + np.arange(3)).ravel()
+            self.groups.append((rows, key[a], values[points].reshape(len(rows), -1)))
+
+    def times(self, X: npt.NDArray) -> npt.NDArray:
+        """M_b X for X (|band|, ...) [or a vector]."""
+        out = np.zeros((self.shape[0],) + X.shape[1:])
+        for rows, cols, block in self.groups:
+            out[rows] = block @ X[cols]
+        return out
+
+    def transpose_times(self, v: npt.NDArray) -> npt.NDArray:
+        """M_b^T v for a vector v (3 |points|)."""
+        out = np.zeros(self.shape[1])
+        for rows, cols, block in self.groups:
+            out[cols] += v[rows] @ block  # a group's columns are distinct
+        return out
 
 
 def _gather_rows(comm: MPI.Comm, local: npt.NDArray) -> npt.NDArray:
@@ -87,6 +126,7 @@ class ContactCompliance:
         self._to_block = np.zeros(0, dtype=np.int64)
         self.Q_ss, self.Q_sb = np.zeros((0, 0)), np.zeros((0, 0))
         self.R_bs, self.Z_bb = np.zeros((0, 0)), np.zeros((0, 0))
+        self._Q_bs = None  # Q_sb^T, C-ordered, made when G needs it
         self._band_rows()
 
     def points_to_block(self, rank_major: npt.NDArray) -> npt.NDArray:
@@ -96,6 +136,38 @@ class ContactCompliance:
         return out
 
     # -- the blocks ---------------------------------------------------------------------------
+    def restrict(self, ops: PointOperators, keep: npt.NDArray, keep_band: npt.NDArray) -> None:
+        """Keep this rank's points where ``keep`` (over its points, in order; ``ops``: the kept
+        points' operators) and the band dofs where ``keep_band`` (the same on every rank): the
+        blocks' rows and columns of the others are dropped, no solve."""
+        comm = self.comm
+        counts = comm.allgather(int(np.count_nonzero(keep)))
+        kept_rows = np.repeat(np.concatenate(comm.allgather(keep)), 3)
+        block = self._to_block[kept_rows]  # the kept rows' blocks rows, rank by rank
+        order = np.sort(block)
+        self._to_block = np.searchsorted(order, block)
+        self._counts, self.points = counts, sum(counts)
+        self.Q_ss = self.Q_ss[np.ix_(order, order)]
+        self.Q_sb = self.Q_sb[np.ix_(order, keep_band)]
+        self.R_bs = self.R_bs[np.ix_(keep_band, order)]
+        self.Z_bb = self.Z_bb[np.ix_(keep_band, keep_band)]
+        self._Q_bs = None
+        self.band = self.band[keep_band]
+        self._band_rows()
+        self._point_matrices(ops)
+
+    def _point_matrices(self, ops: PointOperators) -> None:
+        """E_s and F_s W of all points (rows rank by rank) from this rank's points' operators."""
+        for mat in (self._E, self._F):
+            if mat is not None:
+                mat.destroy()
+        firsts = np.cumsum([0] + [3 * c for c in self._counts])
+        rows = firsts[self.comm.rank] + np.arange(3 * self._counts[self.comm.rank])
+        cols = self.zone_index(ops.slave_dofs.ravel()).reshape(ops.slave_dofs.shape)
+        m = 3 * self.points
+        self._E = self._point_matrix(rows, cols, ops.E_slave, m)
+        self._F = self._point_matrix(rows, cols, ops.F_slave * ops.weight[:, None, None], m)
+
     def extend(self, ops: PointOperators, new: int, band: npt.NDArray) -> None:
         """Add this rank's last ``new`` points of ``ops`` (the operators of all of its points, the
         earlier ones first) and the master dofs ``band`` (global, the same on every rank, none
@@ -118,14 +190,9 @@ class ContactCompliance:
             later = new_firsts[r] + np.arange(3 * added[r])
             to_block[firsts[r] : firsts[r + 1]] = np.concatenate([earlier, later])
         self._counts, self._to_block, self.points = counts, to_block, sum(counts)
-        for mat in (self._E, self._F):
-            if mat is not None:
-                mat.destroy()
+        self._point_matrices(ops)
         cols = self.zone_index(ops.slave_dofs.ravel()).reshape(ops.slave_dofs.shape)
         weighted = ops.F_slave * ops.weight[:, None, None]
-        rows = firsts[comm.rank] + np.arange(3 * counts[comm.rank])
-        self._E = self._point_matrix(rows, cols, ops.E_slave, 3 * self.points)
-        self._F = self._point_matrix(rows, cols, weighted, 3 * self.points)
         # the new points alone, rank by rank (their order in the blocks)
         first_new = counts[comm.rank] - new
         new_rows = new_firsts[comm.rank] - m_old + np.arange(3 * new)
@@ -157,6 +224,7 @@ class ContactCompliance:
         E_new.destroy()
         F_new.destroy()
         self.Q_ss, self.Q_sb, self.R_bs, self.Z_bb = Q_ss, Q_sb, R_bs, Z_bb
+        self._Q_bs = None
 
     def _band_rows(self) -> None:
         """This rank's zone rows of the band (local indices) and their band positions."""
@@ -226,33 +294,32 @@ class ContactCompliance:
         )
 
     # -- per pairing ----------------------------------------------------------------------------
-    def master_operator(self, dofs: npt.NDArray, values: npt.NDArray) -> scipy.sparse.csr_array:
+    def master_operator(self, dofs: npt.NDArray, values: npt.NDArray) -> "MasterOperator | None":
         """M_b (3 |points| x |band|): all points' master parts (``PointOperators.master_dofs`` and
         ``master``, in the blocks' point order) on the band; None if a dof lies outside it."""
-        n, nd = dofs.shape
-        if n == 0:
-            return scipy.sparse.csr_array((0, len(self.band)))
-        if len(self.band) == 0:
+        n = len(dofs)
+        if n and len(self.band) == 0:
             return None
         sorted_band = self.band[self._band_sort]
         position = np.minimum(np.searchsorted(sorted_band, dofs.ravel()), len(self.band) - 1)
-        if not np.array_equal(sorted_band[position], dofs.ravel()):
+        if n and not np.array_equal(sorted_band[position], dofs.ravel()):
             return None
-        index = self._band_sort[position]
-        rows = np.repeat(np.arange(3 * n).reshape(n, 3), nd, axis=1)
-        cols = np.repeat(index.reshape(n, nd), 3, axis=0).reshape(n, -1)
-        return scipy.sparse.csr_array(
-            (values.reshape(n, -1).ravel(), (rows.ravel(), cols.ravel())),
-            shape=(3 * n, len(self.band)),
-        )
+        index = self._band_sort[position].reshape(dofs.shape) if n else dofs
+        return MasterOperator(index, values, len(self.band))
 
-    def matrix(self, M_b: scipy.sparse.csr_array, weight: npt.NDArray) -> npt.NDArray:
+    def matrix(self, M_b: "MasterOperator", weight: npt.NDArray) -> npt.NDArray:
         """G (3 |points| x 3 |points|) for the master operator M_b and the points' weights
-        w / gamma (``PointOperators.weight``, gathered) [m^3/Pa]."""
+        w / gamma (``PointOperators.weight``, gathered) [m^3/Pa]: Q_ss + M_b R_bs + (Q_sb M_b^T +
+        M_b Z_bb M_b^T) W, the last two as transposes of row products (Z_bb is symmetric)."""
         W = np.repeat(weight, 3)
-        G = self.Q_ss + M_b @ self.R_bs
-        G += (M_b @ self.Q_sb.T).T * W
-        G += (M_b @ (M_b @ self.Z_bb).T).T * W
+        G = self.Q_ss + M_b.times(self.R_bs)
+        if self._Q_bs is None:
+            self._Q_bs = np.ascontiguousarray(self.Q_sb.T)
+        T = M_b.times(self._Q_bs)  # (Q_sb M_b^T)^T
+        T += M_b.times(np.ascontiguousarray(M_b.times(self.Z_bb).T))  # (M_b Z_bb M_b^T)^T
+        T = np.ascontiguousarray(T.T)
+        T *= W
+        G += T
         return G
 
     # -- per iteration --------------------------------------------------------------------------
@@ -260,7 +327,7 @@ class ContactCompliance:
         """out = A^-1 rhs (zone vectors)."""
         self.lu.solve(rhs, out)
 
-    def apply_E(self, d: PETSc.Vec, M_b: scipy.sparse.csr_array) -> npt.NDArray:
+    def apply_E(self, d: PETSc.Vec, M_b: "MasterOperator") -> npt.NDArray:
         """E d (3 |points|, on every rank) of a zone vector d."""
         if self.points == 0:
             return np.zeros(0)
@@ -268,10 +335,10 @@ class ContactCompliance:
         self._E.mult(d, y)
         Ed = self.to_block(_gather_rows(self.comm, y.array_r))
         y.destroy()
-        return Ed + M_b @ self._gather_band(d.array_r)
+        return Ed + M_b.times(self._gather_band(d.array_r))
 
     def load(
-        self, v: npt.NDArray, M_b: scipy.sparse.csr_array, weight: npt.NDArray, out: PETSc.Vec
+        self, v: npt.NDArray, M_b: "MasterOperator", weight: npt.NDArray, out: PETSc.Vec
     ) -> None:
         """out = F^T W v (zone vector) [N] of tractions v (3 |points|, the same on every rank) [Pa]
         with the points' weights w / gamma [m^3/Pa]."""
@@ -283,7 +350,7 @@ class ContactCompliance:
         x.array[:] = v[self._to_block[first : first + x.getLocalSize()]]
         self._F.multTranspose(x, out)
         x.destroy()
-        master = M_b.T @ (np.repeat(weight, 3) * v)
+        master = M_b.transpose_times(np.repeat(weight, 3) * v)
         out.array[self._band_local] += master[self._band_owned]
 
     def destroy(self) -> None:

@@ -84,13 +84,27 @@ def solve_tractions(
     G; the first iteration reuses the LU factors of the last call's last iteration when the
     points' states (open, stick, slip) are the same.
     """
+    rows: dict[bytes, npt.NDArray] = {}  # G^T's rows of an active set, (3 |active|, 3 np)
+
+    def times_G(v: npt.NDArray, active: npt.NDArray) -> npt.NDArray:
+        """G v for v zero off the ``active`` points."""
+        key = active.tobytes()
+        if key not in rows:
+            if len(rows) > 3:
+                rows.clear()
+            rows[key] = G.T[(3 * active[:, None] + np.arange(3)).ravel()]
+        return v[(3 * active[:, None] + np.arange(3)).ravel()] @ rows[key]
+
+    def evaluate(y: npt.NDArray):
+        P_t, lam = _law(y, normal, mu)
+        lam_y = lam.vector(normal).ravel()
+        phi = y - y_free + times_G(lam_y, np.flatnonzero(lam.active))
+        return P_t, lam, lam_y, phi
+
     y = y0.copy()
-    P_t, lam = _law(y, normal, mu)
-    lam_y = lam.vector(normal).ravel()
-    phi = y - y_free + G @ lam_y
+    P_t, lam, lam_y, phi = evaluate(y)
     norm = float(np.linalg.norm(phi))
     scale = max(np.abs(y_free).max(initial=0.0), np.abs(y).max(initial=0.0), 1.0)
-    G_t = None  # (active points, G^T on them): kept while the active set does not change
     for iteration in range(max_iterations + 1):
         if np.abs(phi).max(initial=0.0) <= rtol * scale:
             return TractionSolution(y, lam_y, iteration, True)
@@ -112,10 +126,10 @@ def solve_tractions(
             if iteration == 0 and factors and np.array_equal(factors["states"], states):
                 lu = factors["lu"]
             else:
-                if G_t is None or not np.array_equal(G_t[0], active):
-                    G_t = (active, G.T[np.ix_(cols, cols)].reshape(len(active), 3, len(cols)))
+                times_G(lam_y, active)  # G^T's rows of the active set, cached
+                G_t = rows[active.tobytes()][:, cols].reshape(len(active), 3, len(cols))
                 # J^T = D^T G_aa^T block row by block row; J = I + G_aa D in Fortran order
-                J = (D.transpose(0, 2, 1) @ G_t[1]).reshape(len(cols), len(cols)).T
+                J = (D.transpose(0, 2, 1) @ G_t).reshape(len(cols), len(cols)).T
                 J[np.diag_indices_from(J)] += 1.0
                 J[np.abs(J) < 1e-20] = 0.0  # no subnormal numbers in single precision: slow
                 lu = scipy.linalg.lu_factor(
@@ -127,14 +141,12 @@ def solve_tractions(
             dy_a = dy_a.astype(float)
             w = np.zeros_like(y)  # D dy at the active points
             w[cols] = (D @ dy_a.reshape(-1, 3, 1)).ravel()
-            dy = -phi - G @ w
+            dy = -phi - times_G(w, active)
             dy[cols] = dy_a
         alpha, accepted = 1.0, False
         for _ in range(max_backtracks + 1):
             trial = y + alpha * dy
-            P_t_trial, lam_trial = _law(trial, normal, mu)
-            lam_trial_y = lam_trial.vector(normal).ravel()
-            phi_trial = trial - y_free + G @ lam_trial_y
+            P_t_trial, lam_trial, lam_trial_y, phi_trial = evaluate(trial)
             norm_trial = float(np.linalg.norm(phi_trial))
             if norm_trial < (1.0 - 1e-4 * alpha) * norm:
                 accepted = True
@@ -237,32 +249,55 @@ class PointNewtonSolver:
         self.factorizations += 1
 
     def _update_points(self, contact: NitscheContact) -> None:
-        """Extend the candidates and the master band where needed (collective): by the slave facets
-        of this rank with a paired point within ``candidate_gap`` of the master or in contact, and
-        by the dofs of the master facets the candidates pair with. A candidate that lost its
-        partner restarts the blocks."""
+        """Fit the candidates and the master band to the contact (collective).
+
+        Candidates: the points of this rank's slave facets with a paired point in contact or
+        within ``candidate_gap`` of the master; a facet stays a candidate until all of its points
+        are more than twice that gap away (hysteresis). Band: the dofs of the master facets the
+        candidates pair with. New points and dofs extend the compliance blocks, dropped ones are
+        cut from them (when they are a tenth of the candidates or more); a candidate that lost its
+        partner restarts the blocks.
+        """
         trial = contact.trial_tractions()
         P_n = np.einsum("pi,pi->p", trial.traction, trial.normal)
-        near = trial.paired & ((contact.state.gap <= self.candidate_gap) | (P_n <= 0))
+        gap = contact.state.gap
         nq = contact.slave.points_per_facet
-        facets = np.unique(np.flatnonzero(near) // nq)
-        points = (facets[:, None] * nq + np.arange(nq)).ravel()
-        points = points[trial.paired[points]]
-        compliance = self._compliance
-        if self._comm.allreduce(bool(np.any(~trial.paired[self._candidates])), op=MPI.LOR):
+        compliance, comm = self._compliance, self._comm
+
+        def facet_points(mask):
+            facets = np.unique(np.flatnonzero(trial.paired & mask) // nq)
+            points = (facets[:, None] * nq + np.arange(nq)).ravel()
+            return points[trial.paired[points]]
+
+        if comm.allreduce(bool(np.any(~trial.paired[self._candidates])), op=MPI.LOR):
             compliance.reset()
             self._candidates = np.zeros(0, dtype=np.int64)
-        new = np.setdiff1d(points, self._candidates)
+        near = facet_points((gap <= self.candidate_gap) | (P_n <= 0))
+        kept = facet_points((gap <= 2 * self.candidate_gap) | (P_n <= 0))
+        keep = np.isin(self._candidates, kept)
+        dropped = comm.allreduce(int(np.count_nonzero(~keep)), op=MPI.SUM)
+        if dropped and dropped >= 0.1 * compliance.points:
+            self._candidates = self._candidates[keep]
+            needed = self._band_dofs(contact, self._candidates)
+            compliance.restrict(
+                contact.point_operators(self._candidates), keep, np.isin(compliance.band, needed)
+            )
+            self._G_master = None
+        new = np.setdiff1d(near, self._candidates)
         candidates = np.concatenate([self._candidates, new])
-        paired = np.unique(contact.pairing.facet[candidates])
-        paired = np.unique(np.concatenate(self._comm.allgather(paired)))
-        nodes = np.unique(contact.master.blocks[paired])
-        band = np.setdiff1d((nodes[:, None] * 3 + np.arange(3)).ravel(), compliance.band)
-        if self._comm.allreduce(len(new), op=MPI.SUM) or len(band):
+        band = np.setdiff1d(self._band_dofs(contact, candidates), compliance.band)
+        if comm.allreduce(len(new), op=MPI.SUM) or len(band):
             compliance.extend(contact.point_operators(candidates), len(new), band)
             self._candidates = candidates
             self._G_master = None
             self.builds += 1
+
+    def _band_dofs(self, contact: NitscheContact, points: npt.NDArray) -> npt.NDArray:
+        """The dofs of the master facets that ``points`` of any rank pair with (global, sorted)."""
+        paired = np.unique(contact.pairing.facet[points])
+        paired = np.unique(np.concatenate(self._comm.allgather(paired)))
+        nodes = np.unique(contact.master.blocks[paired])
+        return (nodes[:, None] * 3 + np.arange(3)).ravel()
 
     def _gather_points(self, contact: NitscheContact):
         """The candidates' trial tractions, normals, friction coefficients and weights (in the

@@ -64,29 +64,47 @@ def _gather_rows(local: np.ndarray) -> np.ndarray:
 
 def test_compliance_against_dense_product(tiny_case):
     """G = E A'^-1 F^T W of points on the tiny joint's contact surface, from the blocks of
-    ContactCompliance and formed densely (E, F, A' gathered)."""
+    ContactCompliance (built in two extensions, then restricted to part of the points and band)
+    and formed densely (E, F, A' gathered)."""
     comm = MPI.COMM_WORLD
     model = set_up_joint_model(comm, tiny_case())
     problem, contact = model.problem, model.contact
     problem._assemble_operator(1e-4)  # the condensed operator at a step of 0.1 ms
     condensation = problem._condensation
-    A = condensation.A_hat
     zone = condensation.zone
-    J = contact.interface_stiffness(Status.OPEN)
-    A_prime = A.copy()
-    A_prime.axpy(1.0, J, structure=PETSc.Mat.Structure.DIFFERENT_NONZERO_PATTERN)
+    A_prime = condensation.A_hat.copy()
+    A_prime.axpy(
+        1.0,
+        contact.interface_stiffness(Status.OPEN),
+        structure=PETSc.Mat.Structure.DIFFERENT_NONZERO_PATTERN,
+    )
     A_zone = A_prime.createSubMatrix(zone, zone)
     zone_dofs = np.concatenate(comm.allgather(zone.getIndices()))
     compliance = ContactCompliance(A_zone, zone_dofs, "mumps")
     paired = np.flatnonzero(contact.pairing.paired)
     points = paired[:: max(1, len(paired) // 40)]  # a few dozen points per rank
-    ops = contact.point_operators(points)
-    band = np.unique(_gather_rows(ops.master_dofs.ravel()))
-    compliance.extend(ops, len(points), band)
-    M_b = compliance.master_operator(_gather_rows(ops.master_dofs), _gather_rows(ops.master))
-    G = compliance.matrix(M_b, _gather_rows(ops.weight))
+    half = len(points) // 2
+    for first, last in ((0, half), (half, len(points))):  # two extensions
+        ops = contact.point_operators(points[:last])
+        band = np.unique(_gather_rows(ops.master_dofs[first:last].ravel()))
+        compliance.extend(ops, last - first, np.setdiff1d(band, compliance.band))
+    _compare_with_dense(compliance, contact.point_operators(points), A_zone, zone_dofs)
+    keep = np.arange(len(points)) % 3 != 1
+    kept = contact.point_operators(points[keep])
+    needed = np.isin(compliance.band, _gather_rows(kept.master_dofs.ravel()))
+    compliance.restrict(kept, keep, needed)
+    _compare_with_dense(compliance, kept, A_zone, zone_dofs)
+    compliance.destroy()
 
-    # dense reference over the zone
+
+def _compare_with_dense(compliance, ops, A_zone, zone_dofs) -> None:
+    """The compliance's G for this rank's points ``ops`` against the dense product."""
+
+    def gather(a):
+        return compliance.points_to_block(_gather_rows(a))
+
+    M_b = compliance.master_operator(gather(ops.master_dofs), gather(ops.master))
+    G = compliance.matrix(M_b, gather(ops.weight))
     n_zone = len(zone_dofs)
     A_dense = _gather_rows(A_zone.convert("dense").getDenseArray())
     column = {int(d): i for i, d in enumerate(zone_dofs)}
@@ -96,16 +114,14 @@ def test_compliance_against_dense_product(tiny_case):
         for p in range(len(dofs)):
             for c, dof in enumerate(dofs[p]):
                 rows[3 * p : 3 * p + 3, column[int(dof)]] += values[p, :, c]
-        return rows
+        return compliance.to_block(_gather_rows(rows))
 
     E = dense_rows(ops.slave_dofs, ops.E_slave) + dense_rows(ops.master_dofs, ops.master)
     F = dense_rows(ops.slave_dofs, ops.F_slave) + dense_rows(ops.master_dofs, ops.master)
-    E, F = _gather_rows(E), _gather_rows(F)
-    W = np.repeat(_gather_rows(ops.weight), 3)
+    W = np.repeat(gather(ops.weight), 3)
     reference = E @ np.linalg.solve(A_dense, F.T * W)
     assert G.shape == reference.shape == (3 * compliance.points, 3 * compliance.points)
     assert np.abs(G - reference).max() <= 1e-8 * np.abs(reference).max()
-    compliance.destroy()
 
 
 def _installation_steps(case, vibration_steps: int) -> tuple[float, np.ndarray, list[int]]:
