@@ -49,12 +49,13 @@ __all__ = ["NitscheContact", "PointOperators", "TrialTractions"]
 @dataclass
 class TrialTractions:
     """Per slave point (this rank's): the trial traction P = P_n n + P_t (np, 3) [Pa], the contact
-    normal n (np, 3), the friction coefficient mu (np,) and whether the point is paired."""
+    normal n (np, 3), the friction coefficient mu (np,), whether the point is paired and its gap."""
 
     traction: npt.NDArray
     normal: npt.NDArray
     mu: npt.NDArray
     paired: npt.NDArray
+    gap: npt.NDArray  #: normal gap [m] (nan where unpaired)
 
 
 @dataclass
@@ -245,12 +246,20 @@ class NitscheContact:
     def trial_tractions(self) -> TrialTractions:
         """The points' trial tractions, normals, friction coefficients and pairing at the last
         update (this rank's points): the input of ``solver.contact.law``."""
+        pairing = self._pairing()
         return TrialTractions(
             self._P_n[:, None] * self._n + self._P_t,
             self._n.copy(),
             np.asarray(self._mu, dtype=float).copy(),
-            self.pairing.paired.copy(),
+            pairing.paired.copy(),
+            np.where(pairing.paired, pairing.gap, np.nan),
         )
+
+    def _pairing(self) -> Pairing:
+        """The pairing of the last update."""
+        if self.pairing is None:
+            raise RuntimeError("NitscheContact: no update yet")
+        return self.pairing
 
     def point_operators(self, idx: npt.NDArray) -> PointOperators:
         """The trial traction's derivative E = T - gamma jump and the test operator F = theta T -
@@ -263,9 +272,10 @@ class NitscheContact:
         gam = self.gamma[idx]
         phi = self.slave.values[idx]
         H = (phi[:, None, :, None] * np.eye(gdim)[None, :, None, :]).reshape(T.shape)
-        psi = self.pairing.master_values[idx]
+        pairing = self._pairing()
+        psi = pairing.master_values[idx]
         master = gam[:, None, None, None] * psi[:, None, :, None] * np.eye(gdim)[None, :, None, :]
-        blocks = self.master.blocks[self.pairing.facet[idx]]
+        blocks = self.master.blocks[pairing.facet[idx]]
         return PointOperators(
             slave_dofs=(self._slave_blocks[idx][:, :, None] * gdim + np.arange(gdim)).reshape(
                 len(idx), T.shape[2]

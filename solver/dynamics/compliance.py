@@ -19,6 +19,9 @@ right-hand sides. Each pairing then costs only sparse-dense products. G is dimen
 blocks are held on every rank; the points are ordered rank by rank, three rows per point.
 """
 
+from collections.abc import Sequence
+from typing import cast
+
 import numpy as np
 import numpy.typing as npt
 from mpi4py import MPI
@@ -45,11 +48,10 @@ class MasterOperator:
         self.shape = (3 * len(index), band)
         order = np.lexsort(index.T[::-1]) if len(index) else np.zeros(0, dtype=np.int64)
         key = index[order]
-        starts = (
-            np.flatnonzero(np.r_[True, np.any(key[1:] != key[:-1], axis=1)]) if len(key) else []
-        )
-        bounds = np.r_[starts, len(key)]
-        self.groups = []  # (rows of the group's points, their band columns, the dense block)
+        first = np.r_[True, np.any(key[1:] != key[:-1], axis=1)] if len(key) else np.zeros(0, bool)
+        bounds = np.r_[np.flatnonzero(first), len(key)]
+        #: per master facet: the rows of its points, their band columns, the dense block
+        self.groups: list[tuple[npt.NDArray, npt.NDArray, npt.NDArray]] = []
         for a, b in zip(bounds[:-1], bounds[1:]):
             points = order[a:b]
             rows = (3 * points[:, None] + np.arange(3)).ravel()
@@ -126,7 +128,7 @@ class ContactCompliance:
         self._to_block = np.zeros(0, dtype=np.int64)
         self.Q_ss, self.Q_sb = np.zeros((0, 0)), np.zeros((0, 0))
         self.R_bs, self.Z_bb = np.zeros((0, 0)), np.zeros((0, 0))
-        self._Q_bs = None  # Q_sb^T, C-ordered, made when G needs it
+        self._Q_bs: npt.NDArray | None = None  # Q_sb^T, C-ordered, made when G needs it
         self._band_rows()
 
     def points_to_block(self, rank_major: npt.NDArray) -> npt.NDArray:
@@ -226,6 +228,12 @@ class ContactCompliance:
         self.Q_ss, self.Q_sb, self.R_bs, self.Z_bb = Q_ss, Q_sb, R_bs, Z_bb
         self._Q_bs = None
 
+    def _matrices(self) -> tuple[PETSc.Mat, PETSc.Mat]:
+        """E_s and F_s W of the points (rows rank by rank)."""
+        if self._E is None or self._F is None:
+            raise RuntimeError("ContactCompliance: no points added yet")
+        return self._E, self._F
+
     def _band_rows(self) -> None:
         """This rank's zone rows of the band (local indices) and their band positions."""
         band_rows = self.zone_index(self.band) if len(self.band) else np.zeros(0, np.int64)
@@ -242,12 +250,15 @@ class ContactCompliance:
 
     def _point_matrix(self, rows, cols, values, m: int) -> PETSc.Mat:
         """The AIJ matrix (m x zone) with the points' 3 rows each on their zone columns."""
-        mat = PETSc.Mat().create(comm=self.comm)
+        mat = PETSc.Mat().create(comm=self.A.getComm())
         mat.setSizes(((len(rows), m), (self.end - self.start, self.A.getSize()[0])))
         mat.setType(PETSc.Mat.Type.AIJ)
         r = np.repeat(rows.reshape(-1, 3), cols.shape[1], axis=1).ravel()
         c = np.repeat(cols, 3, axis=0).ravel()
-        mat.setPreallocationCOO(r.astype(PETSc.IntType), c.astype(PETSc.IntType))
+        mat.setPreallocationCOO(
+            cast(Sequence[int], r.astype(PETSc.IntType)),
+            cast(Sequence[int], c.astype(PETSc.IntType)),
+        )
         mat.setValuesCOO(values.ravel())
         mat.assemble()
         return mat
@@ -272,10 +283,13 @@ class ContactCompliance:
                 mine = (rows >= self.start) & (rows < self.end)
                 block[rows[mine] - self.start, j[mine] - unit - c0] = 1.0
 
-        EX, FX, Xb = [], [], []
+        EX: list[npt.NDArray] = []
+        FX: list[npt.NDArray] = []
+        Xb: list[npt.NDArray] = []
+        E, F = self._matrices()
 
         def consume(X: PETSc.Mat, c0: int, c1: int) -> None:
-            for mat, out in ((self._E, EX), (self._F, FX)):
+            for mat, out in ((E, EX), (F, FX)):
                 product = mat.matMult(X)
                 out.append(
                     self.to_block(_gather_rows(self.comm, product.getDenseArray()[:, : c1 - c0]))
@@ -313,9 +327,9 @@ class ContactCompliance:
         M_b Z_bb M_b^T) W, the last two as transposes of row products (Z_bb is symmetric)."""
         W = np.repeat(weight, 3)
         G = self.Q_ss + M_b.times(self.R_bs)
-        if self._Q_bs is None:
-            self._Q_bs = np.ascontiguousarray(self.Q_sb.T)
-        T = M_b.times(self._Q_bs)  # (Q_sb M_b^T)^T
+        Q_bs = self._Q_bs if self._Q_bs is not None else np.ascontiguousarray(self.Q_sb.T)
+        self._Q_bs = Q_bs
+        T = M_b.times(Q_bs)  # (Q_sb M_b^T)^T
         T += M_b.times(np.ascontiguousarray(M_b.times(self.Z_bb).T))  # (M_b Z_bb M_b^T)^T
         T = np.ascontiguousarray(T.T)
         T *= W
@@ -331,8 +345,9 @@ class ContactCompliance:
         """E d (3 |points|, on every rank) of a zone vector d."""
         if self.points == 0:
             return np.zeros(0)
-        y = self._E.createVecLeft()
-        self._E.mult(d, y)
+        E, _ = self._matrices()
+        y = E.createVecLeft()
+        E.mult(d, y)
         Ed = self.to_block(_gather_rows(self.comm, y.array_r))
         y.destroy()
         return Ed + M_b.times(self._gather_band(d.array_r))
@@ -345,10 +360,11 @@ class ContactCompliance:
         if self.points == 0:
             out.set(0.0)
             return
-        x = self._F.createVecLeft()
+        _, F = self._matrices()
+        x = F.createVecLeft()
         first = x.getOwnershipRange()[0]
         x.array[:] = v[self._to_block[first : first + x.getLocalSize()]]
-        self._F.multTranspose(x, out)
+        F.multTranspose(x, out)
         x.destroy()
         master = M_b.transpose_times(np.repeat(weight, 3) * v)
         out.array[self._band_local] += master[self._band_owned]

@@ -48,7 +48,7 @@ def solve_columns(
     SuperLU_DIST's parallel MatMatSolve corrupts memory when the number of right-hand sides
     changes between calls."""
     B = PETSc.Mat().createDense(
-        ((A.getLocalSize()[0], A.getSize()[0]), (None, width)), comm=A.getComm()
+        ((A.getLocalSize()[0], A.getSize()[0]), (PETSc.DECIDE, width)), comm=A.getComm()
     )
     B.setUp()
     X = B.duplicate()

@@ -25,7 +25,9 @@ recomputes the compliance blocks.
 """
 
 import time
+from collections.abc import Sequence
 from dataclasses import dataclass
+from typing import Any, cast
 
 import numpy as np
 import numpy.typing as npt
@@ -36,7 +38,7 @@ from petsc4py import PETSc
 import dolfinx
 
 from solver.contact.law import derivative, multipliers
-from solver.contact.model import Status
+from solver.contact.model import ContactModel, Status
 from solver.contact.nitsche import NitscheContact
 from solver.dynamics.compliance import ContactCompliance
 from solver.dynamics.newton import NewtonResult, contact_residual, dirichlet_rows
@@ -214,7 +216,9 @@ class PointNewtonSolver:
         self._zone = zone if zone is not None else PETSc.IS().createStride(end - start, start, 1)
         self._zone_local = self._zone.getIndices() - start
         self._compliance: ContactCompliance | None = None
-        self._G, self._G_master, self._factors = None, None, {}
+        self._G: npt.NDArray | None = None  # the inner problem's G and the master parts it used
+        self._G_master: tuple[npt.NDArray, npt.NDArray] | None = None
+        self._factors: dict[str, Any] = {}  # LU factors of the inner problem, reused
         self.pairing_rtol = pairing_rtol
         self._candidates = np.zeros(0, dtype=np.int64)  # this rank's candidate points
         self.factorizations = 0  #: LU factorisations of A'
@@ -226,6 +230,13 @@ class PointNewtonSolver:
         self.A = A
         self._drop()
 
+    @property
+    def compliance(self) -> ContactCompliance:
+        """The factors of A' and the compliance blocks (after the first solve)."""
+        if self._compliance is None:
+            raise RuntimeError("PointNewtonSolver: no operator factorised yet")
+        return self._compliance
+
     def _drop(self) -> None:
         if self._compliance is not None:
             self._compliance.A.destroy()
@@ -236,11 +247,11 @@ class PointNewtonSolver:
     def _factorise(self, contact: NitscheContact) -> None:
         """A' = A + the linear Nitsche part at every paired point, on the zone, factorised."""
         J = contact.interface_stiffness(Status.OPEN)
-        J.zeroRows(self._bc_rows, diag=0.0)
+        J.zeroRows(cast(Sequence[int], self._bc_rows), diag=0.0)
         # summed at full size: PETSc's MatAXPY of two parallel submatrices whose off-process
         # columns differ fails ("Non conforming matrix add")
         full = self.A.copy()
-        full.axpy(1.0, J, PETSc.Mat.Structure.DIFFERENT_NONZERO_PATTERN)
+        full.axpy(1.0, J, cast(PETSc.Mat.Structure, PETSc.Mat.Structure.DIFFERENT_NONZERO_PATTERN))
         A_prime = full.createSubMatrix(self._zone, self._zone)
         full.destroy()
         zone_dofs = np.concatenate(self._comm.allgather(self._zone.getIndices()))
@@ -260,9 +271,9 @@ class PointNewtonSolver:
         """
         trial = contact.trial_tractions()
         P_n = np.einsum("pi,pi->p", trial.traction, trial.normal)
-        gap = contact.state.gap
+        gap = trial.gap
         nq = contact.slave.points_per_facet
-        compliance, comm = self._compliance, self._comm
+        compliance, comm = self.compliance, self._comm
 
         def facet_points(mask):
             facets = np.unique(np.flatnonzero(trial.paired & mask) // nq)
@@ -278,26 +289,23 @@ class PointNewtonSolver:
         dropped = comm.allreduce(int(np.count_nonzero(~keep)), op=MPI.SUM)
         if dropped and dropped >= 0.1 * compliance.points:
             self._candidates = self._candidates[keep]
-            needed = self._band_dofs(contact, self._candidates)
-            compliance.restrict(
-                contact.point_operators(self._candidates), keep, np.isin(compliance.band, needed)
-            )
+            ops = contact.point_operators(self._candidates)
+            needed = self._band_dofs(ops.master_dofs)
+            compliance.restrict(ops, keep, np.isin(compliance.band, needed))
             self._G_master = None
         new = np.setdiff1d(near, self._candidates)
         candidates = np.concatenate([self._candidates, new])
-        band = np.setdiff1d(self._band_dofs(contact, candidates), compliance.band)
+        ops = contact.point_operators(candidates)
+        band = np.setdiff1d(self._band_dofs(ops.master_dofs), compliance.band)
         if comm.allreduce(len(new), op=MPI.SUM) or len(band):
-            compliance.extend(contact.point_operators(candidates), len(new), band)
+            compliance.extend(ops, len(new), band)
             self._candidates = candidates
             self._G_master = None
             self.builds += 1
 
-    def _band_dofs(self, contact: NitscheContact, points: npt.NDArray) -> npt.NDArray:
-        """The dofs of the master facets that ``points`` of any rank pair with (global, sorted)."""
-        paired = np.unique(contact.pairing.facet[points])
-        paired = np.unique(np.concatenate(self._comm.allgather(paired)))
-        nodes = np.unique(contact.master.blocks[paired])
-        return (nodes[:, None] * 3 + np.arange(3)).ravel()
+    def _band_dofs(self, master_dofs: npt.NDArray) -> npt.NDArray:
+        """The master dofs (``PointOperators.master_dofs``) of the points of every rank (sorted)."""
+        return np.unique(np.concatenate(self._comm.allgather(np.unique(master_dofs))))
 
     def _gather_points(self, contact: NitscheContact):
         """The candidates' trial tractions, normals, friction coefficients and weights (in the
@@ -307,7 +315,7 @@ class PointNewtonSolver:
         trial = contact.trial_tractions()
 
         def gather(a):
-            return self._compliance.points_to_block(
+            return self.compliance.points_to_block(
                 np.concatenate(comm.allgather(np.ascontiguousarray(a)))
             )
 
@@ -317,7 +325,7 @@ class PointNewtonSolver:
             gather(trial.normal[points]),
             gather(trial.mu[points]),
             gather(ops.weight),
-            self._compliance.master_operator(master_dofs, master),
+            self.compliance.master_operator(master_dofs, master),
             (master_dofs, master),
         )
 
@@ -326,14 +334,13 @@ class PointNewtonSolver:
         the master parts moved by at most ``pairing_rtol`` of their size (G is the Jacobian of
         the inner problem; the residuals use the present pairing)."""
         kept = self._G_master
-        if kept is not None and np.array_equal(kept[0], master[0]):
+        if self._G is not None and kept is not None and np.array_equal(kept[0], master[0]):
             change = np.abs(master[1] - kept[1]).max(initial=0.0)
             if change <= self.pairing_rtol * np.abs(kept[1]).max(initial=0.0):
                 return self._G
-        self._G = self._compliance.matrix(M_b, weight)
-        self._G_master = master
-        self._factors = {}
-        return self._G
+        G = self.compliance.matrix(M_b, weight)
+        self._G, self._G_master, self._factors = G, master, {}
+        return G
 
     def solve(
         self,
@@ -353,18 +360,21 @@ class PointNewtonSolver:
         linear.axpy(-1.0, b)
         timings = {"factorise": 0.0, "compliance": 0.0, "tractions": 0.0, "contact": 0.0}
         t0 = time.perf_counter()
+        model = cast(ContactModel, contact)
         norm = contact_residual(
-            linear, contact, u, F, self._bc_local, update=not contact.updated_at(u)
+            linear, model, u, F, self._bc_local, update=not contact.updated_at(u)
         )
         timings["contact"] += time.perf_counter() - t0
         if self._compliance is None:
             t0 = time.perf_counter()
             self._factorise(contact)
             timings["factorise"] += time.perf_counter() - t0
-        compliance = self._compliance
+        compliance = self.compliance
         r_zone, d_zone, v_zone = (compliance.A.createVecLeft() for _ in range(3))
-        b_norm = b.norm() if load_norm is None else load_norm
-        norms, inner, result = [], [], None
+        b_norm = cast(float, b.norm()) if load_norm is None else load_norm
+        norms: list[float] = []
+        inner: list[int] = []
+        result: NewtonResult | None = None
         factorizations0 = self.factorizations
         for k in range(self.max_iterations + 1):
             norms.append(norm)
@@ -434,10 +444,11 @@ class PointNewtonSolver:
             self.A.multAdd(delta, linear, linear)
             timings["compliance"] += time.perf_counter() - t0
             t0 = time.perf_counter()
-            norm = contact_residual(linear, contact, u, F, self._bc_local)
+            norm = contact_residual(linear, model, u, F, self._bc_local)
             timings["contact"] += time.perf_counter() - t0
         for vec in (F, linear, delta, r_zone, d_zone, v_zone):
             vec.destroy()
+        assert result is not None  # every way out of the loop sets it
         result.factorizations = self.factorizations - factorizations0
         result.timings = timings
         result.linear_iterations = inner
