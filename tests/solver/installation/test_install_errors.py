@@ -47,6 +47,13 @@ def test_presets_are_valid_installation_cases():
         ("contact.slave=MP_CONTACT", ["slave and master must differ"]),
         ("contact.lu_solver=umfpack", ["lu_solver", "superlu_dist"]),
         ("contact.condense_bulk=yes", ["condense_bulk", "true or false"]),
+        ('contact.solver="newton"', ["solver", "zone", "points"]),
+        (
+            'contact.solver="points" contact.lagged_friction=false',
+            ["points", "lagged_friction"],
+        ),
+        ("contact.candidate_gap=-1e-6", ["candidate_gap"]),
+        ("contact.quadrature_degree=-1", ["quadrature_degree"]),
         ("output.checkpoint_every=0", ["checkpoint_every"]),
         ("mesh.n_circumferential=10", ["n_circumferential", "multiple of 4"]),
         ("loading.force=1", ["unknown table", "loading"]),
