@@ -3,8 +3,9 @@ contact surfaces and their closest-point pairing, the Nitsche terms between two 
 one mesh and against a rigid plane (docs/contact.md).
 
 ==============  ==================================================================
-``model``       Status, ContactState, the ContactModel protocol
+``model``       Status, ContactState, trial tractions, point operators, ContactModel
 ``friction``    velocity-dependent Coulomb law mu(v)
+``law``         pointwise contact law: multipliers from trial tractions, their derivative
 ``surfaces``    master facets (gathered) and slave quadrature points of a mesh
 ``pairing``     closest points of the slave points on the deformed master surface
 ``nitsche``     NitscheContact: state update, residual, generalized-Newton tangent

@@ -16,7 +16,14 @@ import numpy as np
 import numpy.typing as npt
 from petsc4py import PETSc
 
-__all__ = ["ContactModel", "ContactState", "PointStates", "Status"]
+__all__ = [
+    "ContactModel",
+    "ContactState",
+    "PointOperators",
+    "PointStates",
+    "Status",
+    "TrialTractions",
+]
 
 
 class Status(IntEnum):
@@ -39,6 +46,32 @@ class ContactState:
     coordinates: npt.NDArray  #: deformed slave points x (np, 3) [m]
     weights: npt.NDArray  #: surface quadrature weights (reference configuration) [m^2]
     normal: npt.NDArray  #: n = -n_m, the contact normal pointing out of the slave (np, 3)
+
+
+@dataclass
+class TrialTractions:
+    """Per slave point (this rank's): the trial traction P = P_n n + P_t (np, 3) [Pa], the contact
+    normal n (np, 3), the friction coefficient mu (np,), whether the point is paired and its gap."""
+
+    traction: npt.NDArray
+    normal: npt.NDArray
+    mu: npt.NDArray
+    paired: npt.NDArray
+    gap: npt.NDArray  #: normal gap [m] (nan where unpaired)
+
+
+@dataclass
+class PointOperators:
+    """Linear operators of points q on global (unrolled) dofs: E = E_slave + master and
+    F = F_slave + master, E_slave and F_slave (q, 3, nd_s) on ``slave_dofs`` (q, nd_s), the master
+    part (q, 3, nd_m) on ``master_dofs`` (q, nd_m) [Pa/m]; ``weight`` w / gamma (q,) [m^3/Pa]."""
+
+    slave_dofs: npt.NDArray
+    E_slave: npt.NDArray
+    F_slave: npt.NDArray
+    master_dofs: npt.NDArray
+    master: npt.NDArray
+    weight: npt.NDArray
 
 
 class PointStates(Protocol):

@@ -24,8 +24,6 @@ of the normal n_m and of the projection y with u (curvature/geometric terms of o
 lambda x rotation) are dropped.
 """
 
-from dataclasses import dataclass
-
 from mpi4py import MPI
 from petsc4py import PETSc
 
@@ -39,37 +37,11 @@ from common.material import Material
 from solver.contact.assembly import PointMatrices, assemble_point_vector, grouped_products
 from solver.contact.friction import FrictionLaw
 from solver.contact.law import derivative, multipliers
-from solver.contact.model import ContactState, Status
+from solver.contact.model import ContactState, PointOperators, Status, TrialTractions
 from solver.contact.pairing import Pairing, pair
 from solver.contact.surfaces import MasterSurface, SlaveQuadrature
 
-__all__ = ["NitscheContact", "PointOperators", "TrialTractions"]
-
-
-@dataclass
-class TrialTractions:
-    """Per slave point (this rank's): the trial traction P = P_n n + P_t (np, 3) [Pa], the contact
-    normal n (np, 3), the friction coefficient mu (np,), whether the point is paired and its gap."""
-
-    traction: npt.NDArray
-    normal: npt.NDArray
-    mu: npt.NDArray
-    paired: npt.NDArray
-    gap: npt.NDArray  #: normal gap [m] (nan where unpaired)
-
-
-@dataclass
-class PointOperators:
-    """Linear operators of points q on global (unrolled) dofs: E = E_slave + master and
-    F = F_slave + master, E_slave and F_slave (q, 3, nd_s) on ``slave_dofs`` (q, nd_s), the master
-    part (q, 3, nd_m) on ``master_dofs`` (q, nd_m) [Pa/m]; ``weight`` w / gamma (q,) [m^3/Pa]."""
-
-    slave_dofs: npt.NDArray
-    E_slave: npt.NDArray
-    F_slave: npt.NDArray
-    master_dofs: npt.NDArray
-    master: npt.NDArray
-    weight: npt.NDArray
+__all__ = ["NitscheContact"]
 
 
 class NitscheContact:

@@ -27,7 +27,7 @@ import numpy.typing as npt
 from mpi4py import MPI
 from petsc4py import PETSc
 
-from solver.contact.nitsche import PointOperators
+from solver.contact.model import PointOperators
 from solver.dynamics.linear_algebra import direct_solver, solve_columns
 
 __all__ = ["ContactCompliance", "MasterOperator"]

@@ -38,63 +38,9 @@ import dolfinx
 from solver.contact.model import ContactModel
 from solver.dynamics.factor_store import Factors, FactorStore
 from solver.dynamics.linear_algebra import BlockLU, SumOperator, forcing_term
+from solver.dynamics.residual import contact_residual, dirichlet_rows
 
-__all__ = [
-    "ContactNewtonSolver",
-    "NewtonResult",
-    "contact_residual",
-    "dirichlet_rows",
-    "solve_contact_problem",
-]
-
-
-def dirichlet_rows(bcs: list[dolfinx.fem.DirichletBC]) -> tuple[np.ndarray, np.ndarray]:
-    """The Dirichlet dofs of ``bcs``: this rank's owned ones as global (unrolled) rows, and its
-    local ones (owned and ghost) as indices into the local array."""
-    rows = []
-    for bc in bcs:
-        dofs, _ = bc.dof_indices()
-        imap, bs = bc.function_space.dofmap.index_map, bc.function_space.dofmap.index_map_bs
-        owned = dofs[dofs < imap.size_local * bs]
-        rows.append(imap.local_to_global(owned // bs) * bs + owned % bs)
-    global_rows = (
-        np.unique(np.concatenate(rows)).astype(PETSc.IntType)
-        if rows
-        else np.zeros(0, PETSc.IntType)
-    )
-    local = (
-        np.unique(np.concatenate([bc.dof_indices()[0] for bc in bcs]))
-        if bcs
-        else np.zeros(0, np.int32)
-    )
-    return global_rows, local
-
-
-def contact_residual(
-    linear: PETSc.Vec,
-    contact: ContactModel,
-    u: dolfinx.fem.Function,
-    F: PETSc.Vec,
-    bc_local: np.ndarray,
-    update: bool = True,
-    timings: dict | None = None,
-) -> float:
-    """F = linear + r_c(u) with linear = A u - b (the contact updated at u unless ``update`` is
-    False), zero on the Dirichlet dofs ``bc_local``; returns ||F||. Adds the wall time of the
-    update and of the residual assembly to ``timings`` ("contact update", "contact assembly")."""
-    t0 = time.perf_counter()
-    if update:
-        contact.update(u)
-    t1 = time.perf_counter()
-    rc = contact.residual()
-    with rc.localForm() as loc:
-        loc.array[bc_local[bc_local < loc.array.size]] = 0.0
-    linear.copy(F)
-    F.axpy(1.0, rc)
-    if timings is not None:
-        timings["contact update"] += t1 - t0
-        timings["contact assembly"] += time.perf_counter() - t1
-    return F.norm()
+__all__ = ["ContactNewtonSolver", "NewtonResult", "solve_contact_problem"]
 
 
 @dataclass

@@ -41,7 +41,8 @@ from solver.contact.law import derivative, multipliers
 from solver.contact.model import ContactModel, Status
 from solver.contact.nitsche import NitscheContact
 from solver.dynamics.compliance import ContactCompliance
-from solver.dynamics.newton import NewtonResult, contact_residual, dirichlet_rows
+from solver.dynamics.newton import NewtonResult
+from solver.dynamics.residual import contact_residual, dirichlet_rows
 
 __all__ = ["PointNewtonSolver", "TractionSolution", "solve_tractions"]
 
