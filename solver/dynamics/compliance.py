@@ -88,7 +88,8 @@ class ContactCompliance:
         A: the operator on the zone (zone numbering: the zone's dofs rank by rank), symmetric.
         zone_dofs: the zone's global dofs (of the full space) in zone order, on every rank.
         lu_solver: PETSc factorisation package.
-        width: right-hand sides per multiple-right-hand-side solve.
+        width: right-hand sides per multiple-right-hand-side solve (fewer when fewer columns are
+            asked for, except with SuperLU_DIST, whose repeated solves need the same width).
     """
 
     def __init__(self, A: PETSc.Mat, zone_dofs: npt.NDArray, lu_solver: str, width: int = 64):
@@ -97,6 +98,7 @@ class ContactCompliance:
         self.zone_dofs = zone_dofs
         self.start, self.end = A.getOwnershipRange()
         self.width = width
+        self._fixed_width = lu_solver == "superlu_dist"
         self.lu = direct_solver(self.comm, A, lu_solver)
         self.lu.setUp()
         self.points = 0  #: contact points of the blocks (all ranks)
@@ -298,7 +300,8 @@ class ContactCompliance:
             Xb.append(self._gather_band(X.getDenseArray()[:, : c1 - c0]))
 
         factor = self.lu.getPC().getFactorMatrix()
-        solve_columns(factor, self.A, n, fill, consume, self.width)
+        width = self.width if self._fixed_width else max(1, min(self.width, n))
+        solve_columns(factor, self.A, n, fill, consume, width)
         self.solves += n
         m = 3 * self.points
         return (

@@ -27,11 +27,10 @@ recomputes the compliance blocks.
 import time
 from collections.abc import Sequence
 from dataclasses import dataclass
-from typing import Any, cast
+from typing import cast
 
 import numpy as np
 import numpy.typing as npt
-import scipy.linalg
 from mpi4py import MPI
 from petsc4py import PETSc
 
@@ -43,6 +42,7 @@ from solver.contact.nitsche import NitscheContact
 from solver.dynamics.compliance import ContactCompliance
 from solver.dynamics.newton import NewtonResult
 from solver.dynamics.residual import contact_residual, dirichlet_rows
+from solver.dynamics.traction_jacobian import TractionJacobian
 
 __all__ = ["PointNewtonSolver", "TractionSolution", "solve_tractions"]
 
@@ -75,33 +75,26 @@ def solve_tractions(
     rtol: float = 1e-12,
     max_iterations: int = 60,
     max_backtracks: int = 12,
-    factors: dict | None = None,
+    jacobian: TractionJacobian | None = None,
 ) -> TractionSolution:
     """Solve Phi(y) = y - y_free + G lambda(y) = 0 for the trial tractions y [Pa] of points with
     normals ``normal`` (np, 3) and friction coefficients ``mu`` (np,), from y0.
 
     Semismooth Newton: (I + G D) dy = -Phi with D = d lambda / d y (``solver.contact.law``), whose
-    columns vanish at open points, so that only the active points' block is factorised; the step
-    is halved while ||Phi|| does not decrease. Converged when ||Phi|| <= rtol max(||y_free||,
-    ||y||) (infinity norms). ``factors``: a dict kept by the caller between calls with the same
-    G; the first iteration reuses the LU factors of the last call's last iteration when the
-    points' states (open, stick, slip) are the same.
+    columns vanish at open points, so that only the active points' block is solved
+    (``solver.dynamics.traction_jacobian``); the step is halved while ||Phi|| does not decrease.
+    Converged when ||Phi|| <= rtol max(||y_free||, ||y||) (infinity norms). ``jacobian``: kept
+    by the caller between calls for the same points, so that its factors are reused.
     """
-    rows: dict[bytes, npt.NDArray] = {}  # G^T's rows of an active set, (3 |active|, 3 np)
-
-    def times_G(v: npt.NDArray, active: npt.NDArray) -> npt.NDArray:
-        """G v for v zero off the ``active`` points."""
-        key = active.tobytes()
-        if key not in rows:
-            if len(rows) > 3:
-                rows.clear()
-            rows[key] = G.T[(3 * active[:, None] + np.arange(3)).ravel()]
-        return v[(3 * active[:, None] + np.arange(3)).ravel()] @ rows[key]
+    if jacobian is None:
+        jacobian = TractionJacobian()
+    if jacobian.G is not G:
+        jacobian.set_compliance(G)
 
     def evaluate(y: npt.NDArray):
         P_t, lam = _law(y, normal, mu)
         lam_y = lam.vector(normal).ravel()
-        phi = y - y_free + times_G(lam_y, np.flatnonzero(lam.active))
+        phi = y - y_free + jacobian.times(lam_y, np.flatnonzero(lam.active))
         return P_t, lam, lam_y, phi
 
     y = y0.copy()
@@ -125,26 +118,10 @@ def solve_tractions(
                 lam.slip[active],
             )
             cols = (3 * active[:, None] + np.arange(3)).ravel()
-            states = np.where(lam.stick, 1, 0) + np.where(lam.slip, 2, 0)
-            if iteration == 0 and factors and np.array_equal(factors["states"], states):
-                lu = factors["lu"]
-            else:
-                times_G(lam_y, active)  # G^T's rows of the active set, cached
-                G_t = rows[active.tobytes()][:, cols].reshape(len(active), 3, len(cols))
-                # J^T = D^T G_aa^T block row by block row; J = I + G_aa D in Fortran order
-                J = (D.transpose(0, 2, 1) @ G_t).reshape(len(cols), len(cols)).T
-                J[np.diag_indices_from(J)] += 1.0
-                J[np.abs(J) < 1e-20] = 0.0  # no subnormal numbers in single precision: slow
-                lu = scipy.linalg.lu_factor(
-                    J.astype(np.float32, order="F"), overwrite_a=True, check_finite=False
-                )
-                if factors is not None:
-                    factors.update(states=states, lu=lu)
-            dy_a = scipy.linalg.lu_solve(lu, -phi[cols].astype(np.float32), check_finite=False)
-            dy_a = dy_a.astype(float)
+            dy_a = jacobian.solve(active, D, -phi[cols])
             w = np.zeros_like(y)  # D dy at the active points
             w[cols] = (D @ dy_a.reshape(-1, 3, 1)).ravel()
-            dy = -phi - times_G(w, active)
+            dy = -phi - jacobian.times(w, active)
             dy[cols] = dy_a
         alpha, accepted = 1.0, False
         for _ in range(max_backtracks + 1):
@@ -219,7 +196,8 @@ class PointNewtonSolver:
         self._compliance: ContactCompliance | None = None
         self._G: npt.NDArray | None = None  # the inner problem's G and the master parts it used
         self._G_master: tuple[npt.NDArray, npt.NDArray] | None = None
-        self._factors: dict[str, Any] = {}  # LU factors of the inner problem, reused
+        #: the inner problem's linear solves; its factors are kept while the points are the same
+        self.jacobian = TractionJacobian()
         self.pairing_rtol = pairing_rtol
         self._candidates = np.zeros(0, dtype=np.int64)  # this rank's candidate points
         self.factorizations = 0  #: LU factorisations of A'
@@ -258,6 +236,7 @@ class PointNewtonSolver:
         zone_dofs = np.concatenate(self._comm.allgather(self._zone.getIndices()))
         self._compliance = ContactCompliance(A_prime, zone_dofs, self.lu_solver)
         self._candidates = np.zeros(0, dtype=np.int64)
+        self.jacobian.reset()
         self.factorizations += 1
 
     def _update_points(self, contact: NitscheContact) -> None:
@@ -284,6 +263,7 @@ class PointNewtonSolver:
         if comm.allreduce(bool(np.any(~trial.paired[self._candidates])), op=MPI.LOR):
             compliance.reset()
             self._candidates = np.zeros(0, dtype=np.int64)
+            self.jacobian.reset()
         near = facet_points((gap <= self.candidate_gap) | (P_n <= 0))
         kept = facet_points((gap <= 2 * self.candidate_gap) | (P_n <= 0))
         keep = np.isin(self._candidates, kept)
@@ -294,6 +274,7 @@ class PointNewtonSolver:
             needed = self._band_dofs(ops.master_dofs)
             compliance.restrict(ops, keep, np.isin(compliance.band, needed))
             self._G_master = None
+            self.jacobian.reset()
         new = np.setdiff1d(near, self._candidates)
         candidates = np.concatenate([self._candidates, new])
         ops = contact.point_operators(candidates)
@@ -301,7 +282,7 @@ class PointNewtonSolver:
         if comm.allreduce(len(new), op=MPI.SUM) or len(band):
             compliance.extend(ops, len(new), band)
             self._candidates = candidates
-            self._G_master = None
+            self._G_master = None  # the earlier points keep their places: the factors stay
             self.builds += 1
 
     def _band_dofs(self, master_dofs: npt.NDArray) -> npt.NDArray:
@@ -340,7 +321,7 @@ class PointNewtonSolver:
             if change <= self.pairing_rtol * np.abs(kept[1]).max(initial=0.0):
                 return self._G
         G = self.compliance.matrix(M_b, weight)
-        self._G, self._G_master, self._factors = G, master, {}
+        self._G, self._G_master = G, master
         return G
 
     def solve(
@@ -419,7 +400,7 @@ class PointNewtonSolver:
                     mu,
                     self.traction_rtol,
                     self.traction_iterations,
-                    factors=self._factors,
+                    jacobian=self.jacobian,
                 )
                 if solution.converged:
                     break

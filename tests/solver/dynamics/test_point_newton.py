@@ -2,6 +2,9 @@
 
 - The inner problem y - y_free + G lambda(y) = 0 for uncoupled points (G = g I per point) against
   its closed form (open, stick, slip).
+- The inner problem's linear solves (``TractionJacobian``: FGMRES with kept single-precision
+  factors) against a dense double-precision solve, with the factors reused for a changed
+  derivative and renewed for another active set.
 - The compliance G of ``ContactCompliance`` (blocks once per operator, the master part per
   pairing) against E A'^-1 F^T W formed densely on the tiny joint's condensed zone.
 - The installation steps of the quick frictional joint (self-weight ramp, then eccentric
@@ -14,6 +17,7 @@ Serially and on 2 ranks.
 
 import numpy as np
 import pytest
+import scipy.linalg
 from mpi4py import MPI
 from petsc4py import PETSc
 
@@ -21,6 +25,7 @@ from solver.contact.model import Status
 from solver.dynamics.compliance import ContactCompliance
 from solver.dynamics.loads import Schedule
 from solver.dynamics.point_newton import solve_tractions
+from solver.dynamics.traction_jacobian import TractionJacobian
 from solver.dynamics.time_loop import run
 from solver.installation.model import attach_vibration, set_up_joint_model
 
@@ -56,6 +61,39 @@ def test_uncoupled_points_against_closed_form():
     assert np.allclose(solution.y.reshape(-1, 3), expected, rtol=1e-10, atol=1e-3)
     states = [_closed_form(y_free[p], g[p], normal[p], mu[p]) @ normal[p] < 0 for p in range(n)]
     assert 0 < sum(states) < n  # open and closed points both tested
+
+
+def test_reused_factors_against_dense_solve():
+    rng = np.random.default_rng(3)
+    n = 50
+    G = rng.uniform(0.0, 1.0, (3 * n, 3 * n))
+    G = 50.0 * G @ G.T / n  # compliance-like: symmetric positive, entries of tens
+    jacobian = TractionJacobian(rtol=1e-12)
+    jacobian.set_compliance(G)
+
+    def derivative(points):
+        normal = rng.normal(size=(len(points), 3))
+        normal /= np.linalg.norm(normal, axis=1)[:, None]
+        return normal[:, :, None] * normal[:, None, :] + 0.3 * np.eye(3)
+
+    def dense(active, D):
+        cols = (3 * active[:, None] + np.arange(3)).ravel()
+        return np.eye(len(cols)) + G[np.ix_(cols, cols)] @ scipy.linalg.block_diag(*D)
+
+    active = np.sort(rng.choice(n, 30, replace=False))
+    D = derivative(active)
+    turned = D + 0.02 * rng.normal(size=D.shape)  # e.g. slip directions turned: same factors
+    for D in (D, turned):
+        r = rng.normal(size=3 * len(active))
+        dy = jacobian.solve(active, D, r)
+        assert np.allclose(dense(active, D) @ dy, r, rtol=0, atol=1e-10 * np.abs(r).max())
+    assert jacobian.factorizations == 1 and jacobian.krylov_iterations > 2
+    other = np.sort(rng.choice(n, 20, replace=False))
+    D = derivative(other)
+    r = rng.normal(size=3 * len(other))
+    dy = jacobian.solve(other, D, r)
+    assert np.allclose(dense(other, D) @ dy, r, rtol=0, atol=1e-10 * np.abs(r).max())
+    assert jacobian.factorizations == 2
 
 
 def _gather_rows(local: np.ndarray) -> np.ndarray:
