@@ -161,6 +161,8 @@ class PointNewtonSolver:
         traction_rtol, traction_iterations: tolerance and iteration limit of the inner problem.
         pairing_rtol: G is recomputed when the candidates' master parts moved by more than this
             fraction since it was (or a candidate paired with another master facet).
+        look_ahead: when candidates are added, the facets within this multiple of
+            ``candidate_gap`` are added as well.
     """
 
     def __init__(
@@ -176,6 +178,7 @@ class PointNewtonSolver:
         traction_rtol: float = 1e-12,
         traction_iterations: int = 60,
         pairing_rtol: float = 1e-3,
+        look_ahead: float = 4.0,
     ):
         if max_iterations < 1:
             raise ValueError(f"max_iterations must be >= 1, got {max_iterations}")
@@ -187,6 +190,7 @@ class PointNewtonSolver:
         self.rtol, self.atol, self.max_iterations = rtol, atol, max_iterations
         self.lu_solver = lu_solver
         self.candidate_gap = candidate_gap
+        self.look_ahead = look_ahead
         self.traction_rtol, self.traction_iterations = traction_rtol, traction_iterations
         self._comm: MPI.Comm = A.getComm().tompi4py()
         self._bc_rows, self._bc_local = dirichlet_rows(bcs)
@@ -243,11 +247,12 @@ class PointNewtonSolver:
         """Fit the candidates and the master band to the contact (collective).
 
         Candidates: the points of this rank's slave facets with a paired point in contact or
-        within ``candidate_gap`` of the master; a facet stays a candidate until all of its points
-        are more than twice that gap away (hysteresis). Band: the dofs of the master facets the
-        candidates pair with. New points and dofs extend the compliance blocks, dropped ones are
-        cut from them (when they are a tenth of the candidates or more); a candidate that lost its
-        partner restarts the blocks.
+        within ``candidate_gap`` of the master; when some must be added, those within
+        ``look_ahead`` times that gap come too (fewer, larger extensions); a facet stays a
+        candidate until all of its points are more than twice that far away (hysteresis). Band:
+        the dofs of the master facets the candidates pair with. New points and dofs extend the
+        compliance blocks, dropped ones are cut from them (when they are a tenth of the candidates
+        or more); a candidate that lost its partner restarts the blocks.
         """
         trial = contact.trial_tractions()
         P_n = np.einsum("pi,pi->p", trial.traction, trial.normal)
@@ -265,7 +270,7 @@ class PointNewtonSolver:
             self._candidates = np.zeros(0, dtype=np.int64)
             self.jacobian.reset()
         near = facet_points((gap <= self.candidate_gap) | (P_n <= 0))
-        kept = facet_points((gap <= 2 * self.candidate_gap) | (P_n <= 0))
+        kept = facet_points((gap <= 2 * self.look_ahead * self.candidate_gap) | (P_n <= 0))
         keep = np.isin(self._candidates, kept)
         dropped = comm.allreduce(int(np.count_nonzero(~keep)), op=MPI.SUM)
         if dropped and dropped >= 0.1 * compliance.points:
@@ -276,6 +281,9 @@ class PointNewtonSolver:
             self._G_master = None
             self.jacobian.reset()
         new = np.setdiff1d(near, self._candidates)
+        if comm.allreduce(len(new), op=MPI.SUM):  # add those about to come near as well
+            ahead = facet_points((gap <= self.look_ahead * self.candidate_gap) | (P_n <= 0))
+            new = np.setdiff1d(ahead, self._candidates)
         candidates = np.concatenate([self._candidates, new])
         ops = contact.point_operators(candidates)
         band = np.setdiff1d(self._band_dofs(ops.master_dofs), compliance.band)
