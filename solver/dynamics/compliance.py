@@ -325,19 +325,17 @@ class ContactCompliance:
         return MasterOperator(index, values, len(self.band))
 
     def matrix(self, M_b: "MasterOperator", weight: npt.NDArray) -> npt.NDArray:
-        """G (3 |points| x 3 |points|) for the master operator M_b and the points' weights
-        w / gamma (``PointOperators.weight``, gathered) [m^3/Pa]: Q_ss + M_b R_bs + (Q_sb M_b^T +
-        M_b Z_bb M_b^T) W, the last two as transposes of row products (Z_bb is symmetric)."""
-        W = np.repeat(weight, 3)
-        G = self.Q_ss + M_b.times(self.R_bs)
+        """G (3 |points| x 3 |points|, Fortran order: its transpose's rows are contiguous) for
+        the master operator M_b and the points' weights w / gamma (``PointOperators.weight``,
+        gathered) [m^3/Pa]: Q_ss + M_b R_bs + (Q_sb M_b^T + M_b Z_bb M_b^T) W, built as
+        G^T = W (M_b Q_sb^T + M_b Z_bb M_b^T) + (Q_ss + M_b R_bs)^T (Z_bb is symmetric)."""
         Q_bs = self._Q_bs if self._Q_bs is not None else np.ascontiguousarray(self.Q_sb.T)
         self._Q_bs = Q_bs
-        T = M_b.times(Q_bs)  # (Q_sb M_b^T)^T
-        T += M_b.times(np.ascontiguousarray(M_b.times(self.Z_bb).T))  # (M_b Z_bb M_b^T)^T
-        T = np.ascontiguousarray(T.T)
-        T *= W
-        G += T
-        return G
+        GT = M_b.times(Q_bs)
+        GT += M_b.times(np.ascontiguousarray(M_b.times(self.Z_bb).T))
+        GT *= np.repeat(weight, 3)[:, None]
+        GT += (self.Q_ss + M_b.times(self.R_bs)).T
+        return GT.T
 
     # -- per iteration --------------------------------------------------------------------------
     def solve(self, rhs: PETSc.Vec, out: PETSc.Vec) -> None:

@@ -186,6 +186,8 @@ class PointNewtonSolver:
             raise ValueError("tolerances must be positive (atol >= 0)")
         if not candidate_gap >= 0:
             raise ValueError(f"candidate_gap must be >= 0 m, got {candidate_gap}")
+        if not look_ahead >= 1:
+            raise ValueError(f"look_ahead must be >= 1, got {look_ahead}")
         self.A, self.bcs = A, bcs
         self.rtol, self.atol, self.max_iterations = rtol, atol, max_iterations
         self.lu_solver = lu_solver
@@ -281,13 +283,14 @@ class PointNewtonSolver:
             self._G_master = None
             self.jacobian.reset()
         new = np.setdiff1d(near, self._candidates)
-        if comm.allreduce(len(new), op=MPI.SUM):  # add those about to come near as well
+        added = comm.allreduce(len(new), op=MPI.SUM)
+        if added:  # those about to come near as well
             ahead = facet_points((gap <= self.look_ahead * self.candidate_gap) | (P_n <= 0))
             new = np.setdiff1d(ahead, self._candidates)
         candidates = np.concatenate([self._candidates, new])
         ops = contact.point_operators(candidates)
         band = np.setdiff1d(self._band_dofs(ops.master_dofs), compliance.band)
-        if comm.allreduce(len(new), op=MPI.SUM) or len(band):
+        if added or len(band):
             compliance.extend(ops, len(new), band)
             self._candidates = candidates
             self._G_master = None  # the earlier points keep their places: the factors stay

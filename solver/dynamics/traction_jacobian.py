@@ -3,11 +3,11 @@
 the law's derivative D (3 x 3 per point, ``solver.contact.law``).
 
 The Jacobian changes little from one Newton iteration to the next (slip directions turn, a few
-points change state) and not at all between pairings that keep G. FGMRES preconditioned by the
-single-precision LU factors of an earlier Jacobian on the same active set solves the system to
-double-precision accuracy in a few products with G_aa; the factors are renewed when the active
-set changes or FGMRES needs more than ``max_krylov`` iterations. FGMRES (flexible) because a
-solve in single precision is not exactly linear.
+points change state) and little between pairings. FGMRES preconditioned by the single-precision
+LU factors of an earlier Jacobian on the same active set solves the system in a few products
+with G_aa; the factors are renewed when the active set changes or FGMRES does not converge in
+``max_krylov`` iterations (if it fails with new factors too, a double-precision solve). FGMRES
+(flexible) because a solve in single precision is not exactly linear.
 """
 
 import numpy as np
@@ -49,7 +49,7 @@ class TractionJacobian:
     """Solves (I + G_aa D_a) dy_a = r for a compliance G (3 np x 3 np) and active points a.
 
     ``G`` is replaced (:meth:`set_compliance`) when the pairing changes; the factors then stay as
-    a preconditioner. Counters: ``factorizations`` and ``krylov_iterations``.
+    a preconditioner. Counters: ``factorizations``, ``krylov_iterations`` and ``direct_solves``.
 
     Args:
         max_krylov: FGMRES iterations with the kept factors before they are renewed.
@@ -67,9 +67,11 @@ class TractionJacobian:
         self._lu_active: bytes | None = None
         self.factorizations = 0
         self.krylov_iterations = 0
+        self.direct_solves = 0  #: double-precision solves where FGMRES with new factors failed
 
     def set_compliance(self, G: npt.NDArray) -> None:
-        """A new G of the same points (the factors are kept as a preconditioner)."""
+        """A new G of the same points, or of more points appended to them (the factors are kept
+        as a preconditioner). G in Fortran order is not copied."""
         self.G = G
         self._GT = np.ascontiguousarray(G.T)
         self._rows.clear()
@@ -100,13 +102,18 @@ class TractionJacobian:
             self._block = (key, np.ascontiguousarray(self.rows(active)[:, _dofs(active)]))
         return self._block[1]
 
-    def _factorise(self, active: npt.NDArray, D: npt.NDArray) -> None:
-        """Single-precision LU factors of J = I + G_aa D."""
+    def _jacobian(self, active: npt.NDArray, D: npt.NDArray) -> npt.NDArray:
+        """J = I + G_aa D (Fortran order)."""
         rows = self._block_rows(active)
         n = rows.shape[0]
         # J^T = D^T G_aa^T block row by block row; J in Fortran order is its transpose
         J = (D.transpose(0, 2, 1) @ rows.reshape(len(active), 3, n)).reshape(n, n).T
         J[np.diag_indices_from(J)] += 1.0
+        return J
+
+    def _factorise(self, active: npt.NDArray, D: npt.NDArray) -> None:
+        """Single-precision LU factors of J = I + G_aa D."""
+        J = self._jacobian(active, D)
         J[np.abs(J) < 1e-20] = 0.0  # no subnormal numbers in single precision: slow
         self._lu = scipy.linalg.lu_factor(
             J.astype(np.float32, order="F"), overwrite_a=True, check_finite=False
@@ -119,24 +126,24 @@ class TractionJacobian:
         n = len(r)
         comm = PETSc.COMM_SELF
         A = PETSc.Mat().createPython((n, n), _Operator(self._block_rows(active), D), comm=comm)
-        A.setUp()
         ksp = PETSc.KSP().create(comm)
-        ksp.setOperators(A)
-        ksp.setType(PETSc.KSP.Type.FGMRES)
-        ksp.setGMRESRestart(self.max_krylov)
-        ksp.setTolerances(rtol=self.rtol, atol=0.0, max_it=self.max_krylov)
-        pc = ksp.getPC()
-        pc.setType(PETSc.PC.Type.PYTHON)
-        pc.setPythonContext(_Factors(self._lu))
         b = PETSc.Vec().createWithArray(np.array(r, dtype=PETSc.ScalarType), comm=comm)
         x = b.duplicate()
-        ksp.solve(b, x)
-        self.krylov_iterations += ksp.getIterationNumber()
-        converged = ksp.getConvergedReason() > 0
-        solution = x.array_r.copy()
-        for obj in (x, b, ksp, A):
-            obj.destroy()
-        return solution, converged
+        try:
+            A.setUp()
+            ksp.setOperators(A)
+            ksp.setType(PETSc.KSP.Type.FGMRES)
+            ksp.setGMRESRestart(self.max_krylov)
+            ksp.setTolerances(rtol=self.rtol, atol=0.0, max_it=self.max_krylov)
+            pc = ksp.getPC()
+            pc.setType(PETSc.PC.Type.PYTHON)
+            pc.setPythonContext(_Factors(self._lu))
+            ksp.solve(b, x)
+            self.krylov_iterations += ksp.getIterationNumber()
+            return x.array_r.copy(), ksp.getConvergedReason() > 0
+        finally:
+            for obj in (x, b, ksp, A):
+                obj.destroy()
 
     def solve(self, active: npt.NDArray, D: npt.NDArray, r: npt.NDArray) -> npt.NDArray:
         """dy_a with (I + G_aa D) dy_a = r for the active points (sorted) and D (|a|, 3, 3)."""
@@ -145,4 +152,8 @@ class TractionJacobian:
             if converged:
                 return dy
         self._factorise(active, D)
-        return self._krylov(active, D, r)[0]
+        dy, converged = self._krylov(active, D, r)
+        if not converged:  # J too ill-conditioned for single-precision factors
+            self.direct_solves += 1
+            return scipy.linalg.solve(self._jacobian(active, D), r, check_finite=False)
+        return dy

@@ -81,13 +81,22 @@ def test_reused_factors_against_dense_solve():
         return np.eye(len(cols)) + G[np.ix_(cols, cols)] @ scipy.linalg.block_diag(*D)
 
     active = np.sort(rng.choice(n, 30, replace=False))
-    D = derivative(active)
-    turned = D + 0.02 * rng.normal(size=D.shape)  # e.g. slip directions turned: same factors
-    for D in (D, turned):
+    D_0 = derivative(active)
+    turned = D_0 + 0.02 * rng.normal(size=D_0.shape)  # e.g. slip directions turned
+    for D in (D_0, turned):  # the second with the first's factors
         r = rng.normal(size=3 * len(active))
         dy = jacobian.solve(active, D, r)
         assert np.allclose(dense(active, D) @ dy, r, rtol=0, atol=1e-10 * np.abs(r).max())
     assert jacobian.factorizations == 1 and jacobian.krylov_iterations > 2
+    # more points appended (an extension of the compliance blocks): the factors stay
+    extended = np.zeros((3 * n + 6, 3 * n + 6), order="F")
+    extended[: 3 * n, : 3 * n] = G
+    extended[3 * n :, :] = 1.0
+    extended[:, 3 * n :] = 1.0
+    jacobian.set_compliance(extended)
+    dy = jacobian.solve(active, turned, r)
+    assert np.allclose(dense(active, turned) @ dy, r, rtol=0, atol=1e-10 * np.abs(r).max())
+    assert jacobian.factorizations == 1
     other = np.sort(rng.choice(n, 20, replace=False))
     D = derivative(other)
     r = rng.normal(size=3 * len(other))
