@@ -10,6 +10,8 @@ with G_aa; the factors are renewed when the active set changes or FGMRES does no
 (flexible) because a solve in single precision is not exactly linear.
 """
 
+from typing import cast
+
 import numpy as np
 import numpy.typing as npt
 import scipy.linalg
@@ -127,7 +129,8 @@ class TractionJacobian:
         comm = PETSc.COMM_SELF
         A = PETSc.Mat().createPython((n, n), _Operator(self._block_rows(active), D), comm=comm)
         ksp = PETSc.KSP().create(comm)
-        b = PETSc.Vec().createWithArray(np.array(r, dtype=PETSc.ScalarType), comm=comm)
+        b = PETSc.Vec().createSeq(n, comm=comm)
+        b.array[:] = r
         x = b.duplicate()
         try:
             A.setUp()
@@ -140,7 +143,7 @@ class TractionJacobian:
             pc.setPythonContext(_Factors(self._lu))
             ksp.solve(b, x)
             self.krylov_iterations += ksp.getIterationNumber()
-            return x.array_r.copy(), ksp.getConvergedReason() > 0
+            return x.array_r.copy(), cast(int, ksp.getConvergedReason()) > 0
         finally:
             for obj in (x, b, ksp, A):
                 obj.destroy()
