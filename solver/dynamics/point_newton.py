@@ -44,7 +44,7 @@ from solver.dynamics.newton import NewtonResult
 from solver.dynamics.residual import contact_residual, dirichlet_rows
 from solver.dynamics.traction_jacobian import TractionJacobian
 
-__all__ = ["PointNewtonSolver", "TractionSolution", "solve_tractions"]
+__all__ = ["PointNewtonSolver", "TractionSolution", "solve_tractions", "stick_restart"]
 
 
 @dataclass
@@ -66,6 +66,20 @@ def _law(y: npt.NDArray, normal: npt.NDArray, mu: npt.NDArray):
     return P_t, multipliers(P_n, P_t, mu)
 
 
+def stick_restart(y: npt.NDArray, normal: npt.NDArray, mu: npt.NDArray) -> npt.NDArray:
+    """The trial tractions y (3 per point) [Pa] with each slipping point's tangential part pulled
+    just inside its friction disk (radius mu p, p = -P_n > 0): those points become stuck."""
+    P = y.reshape(-1, 3)
+    P_n = np.einsum("pi,pi->p", P, normal)
+    P_t = P - P_n[:, None] * normal
+    radius = np.linalg.norm(P_t, axis=1)
+    limit = mu * np.maximum(-P_n, 0.0)
+    slipping = (P_n < 0) & (radius > limit)
+    scale = np.ones_like(radius)
+    scale[slipping] = (1.0 - 1e-3) * limit[slipping] / radius[slipping]
+    return (P_n[:, None] * normal + scale[:, None] * P_t).ravel()
+
+
 def solve_tractions(
     G: npt.NDArray,
     y_free: npt.NDArray,
@@ -76,6 +90,7 @@ def solve_tractions(
     max_iterations: int = 60,
     max_backtracks: int = 12,
     jacobian: TractionJacobian | None = None,
+    restarts: int = 2,
 ) -> TractionSolution:
     """Solve Phi(y) = y - y_free + G lambda(y) = 0 for the trial tractions y [Pa] of points with
     normals ``normal`` (np, 3) and friction coefficients ``mu`` (np,), from y0.
@@ -83,8 +98,11 @@ def solve_tractions(
     Semismooth Newton: (I + G D) dy = -Phi with D = d lambda / d y (``solver.contact.law``), whose
     columns vanish at open points, so that only the active points' block is solved
     (``solver.dynamics.traction_jacobian``); the step is halved while ||Phi|| does not decrease.
-    Converged when ||Phi|| <= rtol max(||y_free||, ||y||) (infinity norms). ``jacobian``: kept
-    by the caller between calls for the same points, so that its factors are reused.
+    Where no step decreases ||Phi|| (the slip law's derivative does not see a point that should
+    stick: Newton stalls with every point slipping), the iteration restarts from
+    :func:`stick_restart` of its iterate, at most ``restarts`` times. Converged when
+    ||Phi|| <= rtol max(||y_free||, ||y||) (infinity norms). ``jacobian``: kept by the caller
+    between calls for the same points, so that its factors are reused.
     """
     if jacobian is None:
         jacobian = TractionJacobian()
@@ -133,7 +151,13 @@ def solve_tractions(
                 break
             alpha *= 0.5
         if not accepted:
-            break
+            if restarts == 0:
+                break
+            restarts -= 1
+            y = stick_restart(y, normal, mu)
+            P_t, lam, lam_y, phi = evaluate(y)
+            norm = float(np.linalg.norm(phi))
+            continue
         y, P_t, lam, lam_y, phi, norm = (
             trial,
             P_t_trial,

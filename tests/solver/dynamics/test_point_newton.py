@@ -1,7 +1,8 @@
 """Newton on the contact points (solver/dynamics/point_newton.py, solver/dynamics/compliance.py).
 
 - The inner problem y - y_free + G lambda(y) = 0 for uncoupled points (G = g I per point) against
-  its closed form (open, stick, slip).
+  its closed form (open, stick, slip); a recorded problem where Newton stalls with every point
+  slipping, solved after the stick restart.
 - The inner problem's linear solves (``TractionJacobian``: FGMRES with kept single-precision
   factors) against a dense double-precision solve, with the factors reused for a changed
   derivative and renewed for another active set.
@@ -14,6 +15,8 @@
 
 Serially and on 2 ranks.
 """
+
+from pathlib import Path
 
 import numpy as np
 import pytest
@@ -61,6 +64,23 @@ def test_uncoupled_points_against_closed_form():
     assert np.allclose(solution.y.reshape(-1, 3), expected, rtol=1e-10, atol=1e-3)
     states = [_closed_form(y_free[p], g[p], normal[p], mu[p]) @ normal[p] < 0 for p in range(n)]
     assert 0 < sum(states) < n  # open and closed points both tested
+
+
+def test_stalled_slip_restarts_stuck():
+    """Four points of an inner problem recorded on the converged joint's self-weight stage: from
+    their iterate's tractions, every point slipping, Newton finds no step that lowers ||Phi||;
+    restarted from ``stick_restart`` it converges, to a solution of Phi = 0 (checked here)."""
+    data = np.load(Path(__file__).parent / "data" / "stalling_slip.npz")
+    G, y_free, y0, normal, mu = (data[k] for k in ("G", "y_free", "y0", "normal", "mu"))
+    stalled = solve_tractions(G, y_free, y0, normal, mu, restarts=0)
+    assert not stalled.converged
+    solution = solve_tractions(G, y_free, y0, normal, mu)
+    assert solution.converged
+    phi = solution.y - y_free + G @ solution.multipliers
+    assert np.abs(phi).max() <= 1e-10 * np.abs(y_free).max()
+    P = solution.y.reshape(-1, 3)
+    P_n = np.einsum("pi,pi->p", P, normal)
+    assert np.all(P_n < 0)  # all four in contact
 
 
 def test_reused_factors_against_dense_solve():
