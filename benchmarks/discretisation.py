@@ -34,7 +34,7 @@ from solver.modal.interface import bonded_band
 #: (label, case overrides); the last one is the reference
 DISCRETISATIONS = [
     (
-        "8 around, 0.25 m, degree 2 (cases/install.toml)",
+        "8 around, 0.25 m, degree 2 (cases/coarse.toml)",
         ["mesh.n_circumferential=8", "mesh.axial_size=0.25"],
     ),
     ("24 around, degree 2", ["mesh.n_circumferential=24"]),

@@ -7,11 +7,13 @@ vibration at those frequencies plus a non-modal control, and a report. Outputs g
 plots, ParaView files, summary.txt); a killed run continues with --resume, which refuses a
 case that would compute something else (exit code 2, naming the keys that differ).
 
-The default case is cases/install.toml (the coarse frictional joint with 0.05 s stages);
---quick is --case install_quick (a smoke run), --full is --case scaled (the case file's
-discretisation and stage durations, without the default run's cost reductions).
+The default case is cases/scaled.toml: the reference sequence (the 68 Hz and 100 Hz lead-in,
+then at 3.6 kN the four best-ranked natural frequencies of the settled joint up to 330 Hz, the
+(2, 1) mode and a non-modal control, 0.1 s each) on the converged joint (48 elements around,
+degree 2); --full is --case scaled_full (the ten best-ranked natural frequencies), --quick is
+--case install_quick (a smoke run on a tiny joint).
 
-Usage: mpirun -n 2 python demos/install.py [--case install] [--set table.key=value ...]
+Usage: mpirun -n 2 python demos/install.py [--case scaled] [--set table.key=value ...]
        [--mu-s 0.5 --mu-d 0.4 --d-c 100] [--damping rayleigh|modal]
        [--forcing eccentric|face|shaker]
        [--quick | --full] [--output DIR] [--resume]
@@ -27,9 +29,9 @@ from mpi4py import MPI
 from solver.installation import cli
 from solver.installation.runner import Installation
 
-DEFAULT_CASE = "install"
+DEFAULT_CASE = "scaled"
 QUICK_CASE = "install_quick"
-FULL_CASE = "scaled"
+FULL_CASE = "scaled_full"
 
 
 def parse(argv: list[str] | None) -> argparse.Namespace:
@@ -39,8 +41,8 @@ def parse(argv: list[str] | None) -> argparse.Namespace:
     p.add_argument(
         "--full",
         action="store_true",
-        help=f"--case {FULL_CASE}: the case file's discretisation and stage durations "
-        "(without the default run's cost reductions)",
+        help=f"--case {FULL_CASE}: the reference sequence with the ten best-ranked natural "
+        "frequencies",
     )
     p.add_argument(
         "--resume",

@@ -63,11 +63,13 @@ def test_extends_merges_tables_and_the_child_wins(tmp_path):
 
 
 def test_presets_extend_presets():
-    coarse, install = read_case("coarse"), read_case("install")
+    scaled, coarse = read_case("scaled"), read_case("coarse")
     assert coarse["mesh"]["n_circumferential"] == 8 and coarse["contact"]["theta"] == -1
-    assert install["mesh"] == coarse["mesh"] and install["vibration"]["stage_duration_s"] == 0.05
+    assert coarse["contact"]["solver"] == "zone" and scaled["contact"]["solver"] == "points"
+    assert coarse["friction"] == scaled["friction"] and coarse["time"] == scaled["time"]
     quick = read_case("install_quick")
-    assert quick["friction"]["mu_s"] == 0.0 and quick["contact"] == install["contact"]
+    assert quick["friction"]["mu_s"] == 0.0 and quick["contact"] == scaled["contact"]
+    assert read_case("scaled_full")["vibration"]["n_frequencies"] == 10
 
 
 def test_extends_errors(tmp_path):

@@ -37,7 +37,7 @@ WITHOUT_PROGRESS_BAR = ("joint_geometry", "modal", "lumped")
         ("parameter_study", ["--variants", "wet_friction"], ["unknown variant", "wet_friction"]),
         ("parameter_study", ["--set", "mesh.n_circumferential=10"], ["multiple of 4"]),
         ("install", ["--quick", "--case", "scaled"], ["--quick is --case install_quick"]),
-        ("install", ["--full", "--quick"], ["--full is --case scaled"]),
+        ("install", ["--full", "--quick"], ["--full is --case scaled_full"]),
         ("sweep", ["--quick", "--case", "coarse"], ["--quick is --case quick"]),
         ("modal", ["--quick", "--case", "full_scale"], ["--quick is --case modal_quick"]),
         ("joint_geometry", ["--case", "no_such_case"], ["no_such_case", "presets"]),
