@@ -123,7 +123,7 @@ def test_ignores_other_sections(tmp_path):
     path.write_text((CASES / "scaled.toml").read_text() + '\n[post_processing]\nformat = "vtx"\n')
     joint, material, options = load_geometry(path)
     assert material == Material(E=210e9, nu=0.3, rho=7850.0)
-    assert options == MeshOptions(contact_axial_size=0.01, contact_zone_above=0.08)
+    assert options == MeshOptions(contact_axial_size=0.01, contact_zone_above=0.15)
     assert joint.mp.half_angle_deg == 1.05
 
 
