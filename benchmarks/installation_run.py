@@ -11,6 +11,7 @@ time of one triangular solve with the contact zone's LU factors and the ratio (t
     mpirun -n 2 python benchmarks/installation_run.py                 # cases/scaled.toml
     mpirun -n 2 python benchmarks/installation_run.py --case scaled_full
     mpirun -n 2 python benchmarks/installation_run.py --set vibration.n_frequencies=1
+    mpirun -n 2 python benchmarks/installation_run.py --output DIR --resume   # a killed run
 """
 
 import argparse
@@ -101,6 +102,7 @@ def main(argv=None) -> int:
         "--set", action="append", default=[], metavar="TABLE.KEY=VALUE", help="case override"
     )
     p.add_argument("--output", default="output/installation_run", help="output folder of the run")
+    p.add_argument("--resume", action="store_true", help="continue from the checkpoint in --output")
     a = p.parse_args(argv)
     comm = MPI.COMM_WORLD
     t0 = time.perf_counter()
@@ -108,7 +110,7 @@ def main(argv=None) -> int:
     timer = PhaseTimer().install()
     profile = StageProfile(comm, timer)
     runner = Installation(comm, case, a.output, progress=False, on_stage=profile)
-    runner.run()
+    runner.run(resume=a.resume)
     timer.uninstall()
     profile.table(runner.model.timings_s["set-up"], time.perf_counter() - t0)
     return 0
