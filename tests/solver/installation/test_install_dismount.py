@@ -1,7 +1,8 @@
 """docs/physics.md §5.5 (dismount) and 5.7 (fast sweep) on the coarse joint, branched from one
 settled state.
 
-The joint of cases/coarse.toml, settled by the 10 kN self-weight ramped over 0.5 s in 10 ms
+The joint of cases/coarse.toml, solved as the default run solves (Newton on the contact points,
+2 x 2 points per slave facet, MUMPS), settled by the 10 kN self-weight ramped over 0.5 s in 10 ms
 steps (slow for the TP's 24 Hz axial oscillation on the wedge) and saved with
 solver.installation.checkpoint. f_r is the best-ranked natural frequency of the settled joint
 (choose_frequencies, as the installation run); A = 3.6 kN (§3) at the TP's top edge.
@@ -41,6 +42,8 @@ SEPARATION_FRACTION = 0.01  #: normal force below this fraction of the settled o
 DISMOUNT_DURATION_S = 0.05  #: longest pull + vibration stage [s]
 SWEEP_DURATION_S = 0.05
 SWEEP_SPAN = (0.8, 1.2)  #: ramp from / to these multiples of f_r
+#: the default run's contact solver (cases/scaled.toml) on the coarse joint
+POINTS = ['contact.solver="points"', "contact.quadrature_degree=3", 'contact.lu_solver="mumps"']
 
 
 def _observe(model, rows: list):
@@ -103,7 +106,7 @@ def _vibrate(model, stage: Stage, f_max: float, chunks: int = 1, stop=None) -> n
 @pytest.fixture(scope="module")
 def settled(coarse_case, shared_dir):
     comm = MPI.COMM_WORLD
-    case = coarse_case("self_weight.ramp_time_s=0.5", "self_weight.dt_s=0.01")
+    case = coarse_case("self_weight.ramp_time_s=0.5", "self_weight.dt_s=0.01", *POINTS)
     model = set_up_joint_model(comm, case)
     sw = case.self_weight
     history = _advance(model, sw.duration_s, sw.dt_s)
