@@ -44,7 +44,7 @@ from solver.dynamics.loads import Schedule, Stage
 from solver.dynamics.time_loop import Observer, run
 from solver.installation import checkpoint
 from solver.installation.case import InstallationCase
-from solver.installation.frequencies import choose_frequencies
+from solver.installation.frequencies import Excitation, choose_frequencies
 from solver.installation.model import (
     JointModel,
     attach_vibration,
@@ -63,6 +63,7 @@ class SettledJoint:
     f_r: float  #: best-ranked natural frequency [Hz]
     f_c: float  #: non-modal control frequency [Hz]
     frequencies_hz: np.ndarray  #: natural frequencies of the settled joint [Hz]
+    chosen: list[Excitation]  #: the installation run's frequency choice
 
 
 def settle(comm: MPI.Comm, overrides: list[str], case_name: str = "coarse") -> SettledJoint:
@@ -84,7 +85,7 @@ def settle(comm: MPI.Comm, overrides: list[str], case_name: str = "coarse") -> S
     chosen = choose_frequencies(records, case.vibration)
     f_r = next(e.frequency_Hz for e in sorted(chosen, key=lambda e: e.rank) if e.role == "modal")
     f_c = next(e.frequency_Hz for e in chosen if e.role == "control")
-    return SettledJoint(model, f_r, f_c, result.frequencies_hz)
+    return SettledJoint(model, f_r, f_c, result.frequencies_hz, chosen)
 
 
 def harmonic_stage(

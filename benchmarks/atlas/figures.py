@@ -5,7 +5,7 @@ from pathlib import Path
 
 import numpy as np
 
-__all__ = ["plot_frequencies", "plot_settlement"]
+__all__ = ["plot_branches", "plot_frequencies", "plot_settlement"]
 
 
 def _pyplot():
@@ -52,6 +52,26 @@ def plot_frequencies(series: dict[str, list[float]], path: Path, title: str) -> 
     ax.set_ylabel("natural frequency [Hz]")
     ax.set_title(title)
     ax.legend(loc="upper left")
+    fig.tight_layout()
+    fig.savefig(path, dpi=120)
+    plt.close(fig)
+
+
+def plot_branches(branches: dict[str, list], path: Path, title: str) -> None:
+    """Settlement [mm] and contact normal force [kN] against time [s] of branches from one
+    state: rows (time [s], settlement [mm], normal force [N]) by label."""
+    plt = _pyplot()
+    fig, (ax, ax2) = plt.subplots(2, 1, figsize=(8, 5.5), sharex=True)
+    for label, rows in branches.items():
+        t, s, n = np.array(rows).T
+        ax.plot(t, s, lw=1.2, label=label)
+        ax2.plot(t, 1e-3 * n, lw=1.2)
+    ax.axhline(0.0, color="k", lw=0.6, ls=":")
+    ax.set_ylabel("settlement [mm]")
+    ax.set_title(title)
+    ax.legend(loc="lower left", fontsize=8)
+    ax2.set_xlabel("time [s]")
+    ax2.set_ylabel("contact normal force [kN]")
     fig.tight_layout()
     fig.savefig(path, dpi=120)
     plt.close(fig)

@@ -23,11 +23,20 @@ def test_atlas_runs_scenarios_and_rebuilds_its_page(shared_dir):
     made = reference.stat().st_mtime_ns
     assert main(["S8", *common]) == 0
     assert reference.stat().st_mtime_ns == made  # S8 reads S1's reference run
+    assert main(["S5", *common]) == 0
     MPI.COMM_WORLD.Barrier()
     text = page.read_text()
     run = json.loads(reference.read_text())
     assert f"settlement {run['settlement_mm'][-1]:.4f} mm" in text  # S1's row, from its run
     assert "| S8: stiffening |" in text
+    dismount = json.loads((out / "runs_of" / "runs" / "dismount" / "run.json").read_text())
+    branches = dismount["branches"]
+    vibrated = not branches["pull 1 x"]["separated"]  # the tiny joint is frictionless: released
+    assert set(branches) == {"pull 1 x", "pull 1.25 x"} | (
+        {"modal", "control"} if vibrated else set()
+    )
+    assert "| S5: dismount |" in text
+    assert (out / "figures" / "scenarios" / "S5_dismount.png").exists()
     assert "(figures/scenarios/S1_settlement.png)" in text
     assert (out / "figures" / "scenarios" / "S8_frequencies.png").exists()
     not_yet = text.split("## Not in the atlas yet")[1]

@@ -1,0 +1,155 @@
+"""The dismount runs of the atlas (docs/physics.md §5.5): from the joint settled by the case's
+self-weight stage, the axial force goes from the self-weight push to an upward pull over a
+ramp and is held (the pull alone), then the same pull plus the vibration amplitude at the
+best-ranked natural frequency and, from the same pulled state, at the non-modal control
+frequency, each for at most a given time.
+
+The frequencies are the installation run's choice (``benchmarks.branches.settle``), a modal
+stage driven at the time-discrete natural frequency of its mode
+(``solver.installation.planning.compensate``). The TP has separated when it is above its
+first-contact position (settlement < 0) and the contact normal force is below
+``SEPARATION_FRACTION`` of the settled one. Kept as ``run.json`` in its folder (a later call
+with the same request reads it).
+"""
+
+import json
+import time
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+from mpi4py import MPI
+
+from benchmarks.branches import settle
+from solver.dynamics.loads import Schedule, Stage
+from solver.dynamics.time_loop import run
+from solver.installation import checkpoint
+from solver.installation.dismount import pull_out_force
+from solver.installation.model import JointModel, attach_vibration
+from solver.installation.planning import compensate
+from solver.installation.settings import StaticForceSettings
+
+__all__ = ["dismount_runs"]
+
+SEPARATION_FRACTION = 0.01  #: normal force below this fraction of the settled one: separated
+CHUNKS = 10  #: a vibration branch stops at the first of these chunks that ends separated
+
+
+def _state(model: JointModel) -> tuple[float, float, float]:
+    """Time [s], settlement [mm] and contact normal force [N] now (collective)."""
+    problem = model.problem
+    return problem.t, model.settlement(problem)["settlement_mm"], model.contact.forces()[0]
+
+
+def _advance(model: JointModel, t_end: float, dt: float, rows: list) -> None:
+    """Integrate to ``t_end`` [s] with step ``dt`` [s], appending ``_state`` after every step."""
+
+    def observe(problem) -> dict:
+        rows.append(_state(model))
+        return {}
+
+    dt_min = dt * model.case.time.dt_min_fraction
+    run(model.problem, t_end, dt, dt_min=dt_min, observers=[observe], progress=False)
+
+
+def dismount_runs(
+    comm: MPI.Comm,
+    case_name: str,
+    overrides: list[str],
+    folder: Path,
+    pull_factors: tuple[float, ...],
+    amplitude_N: float,
+    duration_s: float,
+) -> dict[str, Any]:
+    """Settle the case's joint, then the pulls ``pull_factors`` x the self-weight force alone
+    (ramped over ``duration_s`` [s] and held as long), and the first pull plus ``amplitude_N``
+    [N] at the best mode and at the control frequency (at most ``duration_s`` each).
+    The vibration branches run only where the first pull alone holds. Returns (and keeps in
+    ``folder``/run.json) per branch its (time [s], settlement [mm], normal force [N]) rows and
+    whether it separated, the settled state, the rigid Coulomb pull-out forces
+    and the wall time [s] (collective)."""
+    path = folder / "run.json"
+    request = {
+        "case": case_name,
+        "overrides": overrides,
+        "pull_factors": list(pull_factors),
+        "amplitude_N": amplitude_N,
+        "duration_s": duration_s,
+    }
+    if path.exists():
+        kept = json.loads(path.read_text())
+        if kept["request"] == request:
+            return kept
+    wall = time.perf_counter()
+    joint = settle(comm, overrides, case_name)
+    model, case = joint.model, joint.model.case
+    sw, problem = case.self_weight, model.problem
+    t0, s0, n0 = _state(model)
+    saved = folder / "settled"
+    checkpoint.save(saved, problem, {})
+    modal = min((e for e in joint.chosen if e.role == "modal"), key=lambda e: e.rank)
+    control = next(e for e in joint.chosen if e.role == "control")
+    scheme, steps = case.vibration_scheme(), case.time.steps_per_period
+    drives = compensate([modal, control], [duration_s] * 2, scheme, steps)
+
+    def separated(rows: list) -> bool:
+        return rows[-1][1] < 0.0 and rows[-1][2] < SEPARATION_FRACTION * n0
+
+    def pull_alone(factor: float) -> list:
+        problem.load.shaker = None
+        problem.load.static_axial = StaticForceSettings(
+            (duration_s,), (factor * abs(sw.force_N),)
+        ).history(sw)
+        checkpoint.restore(saved, problem)
+        problem.reset_operator()
+        rows = [_state(model)]
+        _advance(model, t0 + 2 * duration_s, sw.dt_s, rows)
+        return rows
+
+    branches: dict[str, dict[str, Any]] = {}
+    pulled = folder / "pulled"
+    for factor in pull_factors:
+        rows = pull_alone(factor)
+        branches[f"pull {factor:g} x"] = {"rows": rows, "separated": separated(rows)}
+        if factor == pull_factors[0]:
+            checkpoint.save(pulled, problem, {})
+    if not branches[f"pull {pull_factors[0]:g} x"]["separated"]:
+        for name, e in (("modal", drives[0]), ("control", drives[1])):
+            checkpoint.restore(pulled, problem)
+            problem.reset_operator()
+            start = problem.t
+            attach_vibration(
+                model, Schedule([Stage(duration_s, e.forcing_Hz, amplitude_N)], start_s=start)
+            )
+            problem.set_scheme(scheme)
+            branch = [_state(model)]
+            for k in range(1, CHUNKS + 1):
+                _advance(
+                    model, start + k * duration_s / CHUNKS, 1.0 / (e.forcing_Hz * steps), branch
+                )
+                if separated(branch):
+                    break
+            branches[name] = {
+                "rows": branch,
+                "separated": separated(branch),
+                "frequency_Hz": e.frequency_Hz,
+                "forcing_Hz": e.forcing_Hz,
+            }
+            problem.set_scheme(case.self_weight_scheme())
+    alpha, friction = case.joint.mp.half_angle, case.friction
+    result = {
+        "request": request,
+        "name": folder.name,
+        "settled": {"time_s": t0, "settlement_mm": s0, "normal_N": n0},
+        "self_weight_N": abs(sw.force_N),
+        "pull_out_N": {
+            "mu_d": pull_out_force(n0, friction.mu_d, alpha),
+            "mu_s": pull_out_force(n0, friction.mu_s, alpha),
+        },
+        "natural_Hz": [float(f) for f in np.asarray(joint.frequencies_hz)],
+        "branches": branches,
+        "wall_s": time.perf_counter() - wall,
+    }
+    if comm.rank == 0:
+        path.write_text(json.dumps(result))
+    return result
