@@ -4,6 +4,7 @@ docs/scenarios.md (``benchmarks/atlas``).
     mpirun -n 2 python benchmarks/scenarios.py --all                # every scenario in the atlas
     mpirun -n 2 python benchmarks/scenarios.py S1 S8                # a list
     mpirun -n 2 python benchmarks/scenarios.py S1 --case tiny --docs /tmp/atlas.md
+    mpirun -n 2 python benchmarks/scenarios.py S5 S8 --installed output/install   # + installed state
 
 The joint is ``--case`` (default ``scaled``: the converged joint, 48 around, P2) with
 ``--set`` overrides. Each scenario prints its wall time; the page is rebuilt from every outcome
@@ -19,6 +20,7 @@ from common import backend  # noqa: F401
 from mpi4py import MPI
 
 from benchmarks.atlas.catalogue import SCENARIOS, Context, run_scenario
+from benchmarks.atlas.installed import installed_state
 from benchmarks.atlas.page import write_page
 
 
@@ -32,6 +34,13 @@ def main(argv=None) -> int:
     p.add_argument("--set", action="append", default=[], metavar="TABLE.KEY=VALUE")
     p.add_argument("--output", default="output/atlas", help="outputs of the scenarios")
     p.add_argument("--docs", default="docs/scenarios.md", help="the page to rebuild")
+    p.add_argument(
+        "--installed",
+        type=Path,
+        metavar="RUN",
+        help="output folder of a demos/install.py run of the case on as many ranks: S5 also "
+        "dismounts from its last checkpoint, S8 also has the frequencies there",
+    )
     a = p.parse_args(argv)
     comm = MPI.COMM_WORLD
     keys = [k for k, s in SCENARIOS.items() if s.run is not None] if a.all else a.scenarios
@@ -52,9 +61,11 @@ def main(argv=None) -> int:
                 file=sys.stderr,
             )
         return 2
-    ctx = Context(comm, a.case, a.set, Path(a.output))
+    ctx = Context(comm, a.case, a.set, Path(a.output), a.installed)
     try:
-        ctx.case()  # the case is checked before anything runs
+        case = ctx.case()  # the case and the installed state are checked before anything runs
+        if a.installed is not None:
+            installed_state(comm, case, a.installed)
     except (ValueError, FileNotFoundError) as err:
         if comm.rank == 0:
             print(f"error: {err}", file=sys.stderr)

@@ -13,6 +13,7 @@ from mpi4py import MPI
 
 from benchmarks.atlas import figures
 from benchmarks.atlas.dismount import dismount_runs
+from benchmarks.atlas.installed import installed_modes
 from benchmarks.atlas.outcome import Outcome, Row, verdict
 from benchmarks.atlas.self_weight import self_weight_run
 from common.case import read_case
@@ -35,6 +36,9 @@ class Context:
     case_name: str
     overrides: list[str]
     output: Path
+    #: output folder of an installation run of the case (``demos/install.py``): S5 also
+    #: dismounts from its last checkpoint, S8 also has the frequencies there
+    installed: Path | None = None
 
     def case(self, extra: list[str] = ()) -> InstallationCase:
         return InstallationCase.from_dict(read_case(self.case_name, [*self.overrides, *extra]))
@@ -118,73 +122,72 @@ def _branch_state(b: dict[str, Any]) -> str:
     )
 
 
-def s5_dismount(ctx: Context) -> Outcome:
-    """S5: pulls alone at 1 and 1.25 times the self-weight force; the first pull plus vibration
-    at the best mode and at the control frequency (``benchmarks.atlas.dismount``), each phase
-    half as long as the case's vibration stages (0.05 s on the default joint)."""
-    r = dismount_runs(
-        ctx.comm,
-        ctx.case_name,
-        ctx.overrides,
-        ctx.output / "runs" / "dismount",
-        PULL_FACTORS,
-        AMPLITUDE_N,
-        0.5 * ctx.case().vibration.stage_duration_s,
-    )
+def _dismount_rows(r: dict[str, Any], state: str) -> list[Row]:
+    """The S5 rows of the dismount runs ``r`` from ``state`` (words)."""
     b, out = r["branches"], r["pull_out_N"]
     settled = (
-        f"settled {r['settled']['settlement_mm']:.3f} mm, normal force "
+        f"{state} {r['settled']['settlement_mm']:.3f} mm, normal force "
         f"{1e-3 * r['settled']['normal_N']:.2f} kN, rigid Coulomb pull-out "
         f"{1e-3 * out['mu_d']:.2f} / {1e-3 * out['mu_s']:.2f} kN (mu_d / mu_s)"
     )
     pull = r["self_weight_N"] * PULL_FACTORS[0]
+    first = b[f"pull {PULL_FACTORS[0]:g} x"]
     rows = [
         Row(
-            f"pull alone at the self-weight force ({1e-3 * pull:g} kN) does not release (§5.5)",
-            f"{_branch_state(b[f'pull {PULL_FACTORS[0]:g} x'])}; {settled}",
-            verdict(not b[f"pull {PULL_FACTORS[0]:g} x"]["separated"]),
+            f"{state}: pull alone at the self-weight force ({1e-3 * pull:g} kN) does not "
+            "release (§5.5)",
+            f"{_branch_state(first)}; {settled}",
+            verdict(not first["separated"]),
         )
     ]
     for factor in PULL_FACTORS[1:]:
         branch = b[f"pull {factor:g} x"]
         rows.append(
             Row(
-                f"pull alone at {factor:g} x the self-weight force "
+                f"{state}: pull alone at {factor:g} x the self-weight force "
                 f"({1e-3 * factor * r['self_weight_N']:g} kN)",
                 f"{_branch_state(branch)}; {'separated' if branch['separated'] else 'holds'}",
                 "measured",
             )
         )
     if "modal" not in b:  # the pull alone released the joint: no pulled state to vibrate
-        reason = (
-            f"not run: the pull alone releases the joint (rigid pull-out with mu_s "
-            f"{1e-3 * out['mu_s']:.2f} kN against the {1e-3 * pull:g} kN pull)"
+        rows.append(
+            Row(
+                f"{state}: pull + vibration: the best mode releases, the control does not",
+                f"not run: the pull alone releases the joint (rigid pull-out with mu_s "
+                f"{1e-3 * out['mu_s']:.2f} kN against the {1e-3 * pull:g} kN pull)",
+                "not reproduced",
+            )
         )
-        criterion = "pull + vibration: the best mode releases, the control does not"
-        rows.append(Row(criterion, reason, "not reproduced"))
+        return rows
     for name, wanted in (("modal", True), ("control", False)):
-        if name not in b:
-            continue
         branch = b[name]
         rows.append(
             Row(
-                f"pull + {AMPLITUDE_N / 1e3:g} kN at the {'best mode' if wanted else 'control'}"
-                f" ({branch['frequency_Hz']:.2f} Hz, driven at {branch['forcing_Hz']:.2f} Hz) "
+                f"{state}: pull + {AMPLITUDE_N / 1e3:g} kN at the "
+                f"{'best mode' if wanted else 'control'} ({branch['frequency_Hz']:.2f} Hz, "
+                f"driven at {branch['forcing_Hz']:.2f} Hz) "
                 f"{'releases' if wanted else 'does not release'}",
                 f"{_branch_state(branch)}; {'separated' if branch['separated'] else 'holds'}",
                 verdict(branch["separated"] == wanted),
             )
         )
-    if "modal" in b:
-        rows.append(
-            Row(
-                "resonance-selective release: the modal branch releases, the control does not",
-                f"modal {'separated' if b['modal']['separated'] else 'holds'}, control "
-                f"{'separated' if b['control']['separated'] else 'holds'}",
-                verdict(b["modal"]["separated"] and not b["control"]["separated"]),
-            )
+    rows.append(
+        Row(
+            f"{state}: resonance-selective release: the modal branch releases, the control "
+            "does not",
+            f"modal {'separated' if b['modal']['separated'] else 'holds'}, control "
+            f"{'separated' if b['control']['separated'] else 'holds'}",
+            verdict(b["modal"]["separated"] and not b["control"]["separated"]),
         )
-    path, name = ctx.figure("S5", "dismount.png")
+    )
+    return rows
+
+
+def _plot_dismount(ctx: Context, r: dict[str, Any], file: str, title: str) -> str:
+    """Figure ``file`` of S5: settlement of every branch of the dismount runs ``r``."""
+    path, name = ctx.figure("S5", file)
+    b = r["branches"]
     if ctx.comm.rank == 0:
         figures.plot_branches(
             {
@@ -200,9 +203,51 @@ def s5_dismount(ctx: Context) -> Outcome:
                 },
             },
             path,
-            "S5: dismount from the settled joint",
+            title,
         )
-    return _outcome(ctx, "S5", rows, {"dismount": r}, [name])
+    return name
+
+
+def s5_dismount(ctx: Context) -> Outcome:
+    """S5: pulls alone at 1 and 1.25 times the self-weight force; the first pull plus vibration
+    at the best mode and at the control frequency (``benchmarks.atlas.dismount``), each phase
+    half as long as the case's vibration stages (0.05 s on the default joint): from the joint
+    settled by self-weight and, where ``ctx.installed`` names an installation run of the case,
+    from its last checkpoint."""
+    half_stage = 0.5 * ctx.case().vibration.stage_duration_s
+    runs = {
+        "settled": dismount_runs(
+            ctx.comm,
+            ctx.case_name,
+            ctx.overrides,
+            ctx.output / "runs" / "dismount",
+            PULL_FACTORS,
+            AMPLITUDE_N,
+            half_stage,
+        )
+    }
+    rows = _dismount_rows(runs["settled"], "settled by self-weight")
+    names = [
+        _plot_dismount(ctx, runs["settled"], "dismount.png", "S5: dismount from the settled joint")
+    ]
+    if ctx.installed is not None:
+        runs["installed"] = r = dismount_runs(
+            ctx.comm,
+            ctx.case_name,
+            ctx.overrides,
+            ctx.output / "runs" / "dismount_installed",
+            PULL_FACTORS,
+            AMPLITUDE_N,
+            half_stage,
+            ctx.installed,
+        )
+        rows += _dismount_rows(r, f"installed (t = {r['settled']['time_s']:.2f} s)")
+        names.append(
+            _plot_dismount(
+                ctx, r, "dismount_installed.png", "S5: dismount from the installed joint"
+            )
+        )
+    return _outcome(ctx, "S5", rows, runs, names)
 
 
 def s6_friction(ctx: Context) -> Outcome:
@@ -231,7 +276,8 @@ def s6_friction(ctx: Context) -> Outcome:
 
 def s8_stiffening(ctx: Context) -> Outcome:
     """S8, self-weight half: the settled joint's frequencies at half the load and at the end of
-    the stage, against a bonded band as high as the contact at the end."""
+    the stage, against a bonded band as high as the contact at the end; where ``ctx.installed``
+    names an installation run of the case, also in its installed state."""
     r = ctx.reference()
     (t_half, f_half), (t_end, f_end) = (
         (float(k), np.array(f)) for k, f in r["frequencies_Hz"].items()
@@ -255,18 +301,44 @@ def s8_stiffening(ctx: Context) -> Outcome:
             "measured",
         ),
     ]
+    curves = {
+        f"settled, {t_half:g} s": f_half,
+        f"settled, {t_end:g} s": f_end,
+        f"bonded band {1e3 * r['contact_height_m']:.0f} mm": bonded,
+    }
+    runs = {"reference": r}
+    if ctx.installed is not None:
+        runs["installed"] = i = installed_modes(
+            ctx.comm,
+            ctx.case_name,
+            ctx.overrides,
+            ctx.output / "runs" / "modes_installed",
+            ctx.installed,
+        )
+        f_inst, bonded_inst = np.array(i["frequencies_Hz"]), np.array(i["bonded_Hz"])
+        rise = f_inst / f_end - 1
+        rows += [
+            Row(
+                f"the ten lowest after the installation run's vibration stages (t = "
+                f"{i['time_s']:.2f} s) against the end of self-weight",
+                f"{100 * rise.min():+.2f} % to {100 * rise.max():+.2f} % (settlement "
+                f"{r['settlement_mm'][-1]:.3f} -> {i['settlement_mm']:.3f} mm)",
+                verdict(bool(np.all(rise > 0))),
+            ),
+            Row(
+                f"installed joint against a bonded band of its contact's height "
+                f"({1e3 * i['contact_height_m']:.0f} mm)",
+                f"{100 * (f_inst / bonded_inst - 1).min():+.2f} % to "
+                f"{100 * (f_inst / bonded_inst - 1).max():+.2f} %",
+                "measured",
+            ),
+        ]
+        curves[f"installed, {i['time_s']:.2f} s"] = f_inst
+        curves[f"bonded band {1e3 * i['contact_height_m']:.0f} mm (installed)"] = bonded_inst
     path, name = ctx.figure("S8", "frequencies.png")
     if ctx.comm.rank == 0:
-        figures.plot_frequencies(
-            {
-                f"settled, {t_half:g} s": f_half,
-                f"settled, {t_end:g} s": f_end,
-                f"bonded band {1e3 * r['contact_height_m']:.0f} mm": bonded,
-            },
-            path,
-            "S8: natural frequencies of the settled joint",
-        )
-    return _outcome(ctx, "S8", rows, {"reference": r}, [name])
+        figures.plot_frequencies(curves, path, "S8: natural frequencies of the settled joint")
+    return _outcome(ctx, "S8", rows, runs, [name])
 
 
 def _outcome(
@@ -346,7 +418,8 @@ SCENARIOS: dict[str, Scenario] = {
         "natural frequencies of the settled joint rise with settlement; against a bonded band "
         "of the same height",
         s8_stiffening,
-        needs="the frequencies after each settling stage of S2: " + _VIBRATION,
+        needs="the frequencies after each settling stage of S2 (`--installed`: after the "
+        "installation run's last checkpoint only): " + _VIBRATION,
     ),
 }
 

@@ -1,10 +1,12 @@
 """The dismount runs of the atlas (docs/physics.md §5.5): from the joint settled by the case's
-self-weight stage, the axial force goes from the self-weight push to an upward pull over a
+self-weight stage (or from the last checkpoint of an installation run of the case, the
+installed state), the axial force goes from the self-weight push to an upward pull over a
 ramp and is held (the pull alone), then the same pull plus the vibration amplitude at the
 best-ranked natural frequency and, from the same pulled state, at the non-modal control
 frequency, each for at most a given time.
 
-The frequencies are the installation run's choice (``benchmarks.branches.settle``), a modal
+The frequencies are the installation run's choice (``benchmarks.branches.settle``, or the
+installation run's own), a modal
 stage driven at the time-discrete natural frequency of its mode
 (``solver.installation.planning.compensate``). The TP has separated when it is above its
 first-contact position (settlement < 0) and the contact normal force is below
@@ -20,6 +22,7 @@ from typing import Any
 import numpy as np
 from mpi4py import MPI
 
+from benchmarks.atlas.installed import restore_installed
 from benchmarks.branches import settle
 from solver.dynamics.loads import Schedule, Stage
 from solver.dynamics.time_loop import run
@@ -60,8 +63,10 @@ def dismount_runs(
     pull_factors: tuple[float, ...],
     amplitude_N: float,
     duration_s: float,
+    installed: Path | None = None,
 ) -> dict[str, Any]:
-    """Settle the case's joint, then the pulls ``pull_factors`` x the self-weight force alone
+    """Settle the case's joint (or restore the state ``installed``: the output folder of an
+    installation run of the case, its last checkpoint), then the pulls ``pull_factors`` x the self-weight force alone
     (ramped over ``duration_s`` [s] and held as long), and the first pull plus ``amplitude_N``
     [N] at the best mode and at the control frequency (at most ``duration_s`` each).
     The vibration branches run only where the first pull alone holds. Returns (and keeps in
@@ -76,30 +81,39 @@ def dismount_runs(
         "amplitude_N": amplitude_N,
         "duration_s": duration_s,
     }
+    if installed is not None:
+        request["installed"] = str(installed)
     if path.exists():
         kept = json.loads(path.read_text())
         if kept["request"] == request:
             return kept
     wall = time.perf_counter()
-    joint = settle(comm, overrides, case_name)
-    model, case = joint.model, joint.model.case
+    if installed is None:
+        joint = settle(comm, overrides, case_name)
+        model, chosen, natural_Hz = joint.model, joint.chosen, list(joint.frequencies_hz)
+    else:
+        model, chosen, natural_Hz = restore_installed(comm, case_name, overrides, installed)
+    case = model.case
     sw, problem = case.self_weight, model.problem
     t0, s0, n0 = _state(model)
     saved = folder / "settled"
     checkpoint.save(saved, problem, {})
-    modal = min((e for e in joint.chosen if e.role == "modal"), key=lambda e: e.rank)
-    control = next(e for e in joint.chosen if e.role == "control")
+    modal = min((e for e in chosen if e.role == "modal"), key=lambda e: e.rank)
+    control = next(e for e in chosen if e.role == "control")
     scheme, steps = case.vibration_scheme(), case.time.steps_per_period
     drives = compensate([modal, control], [duration_s] * 2, scheme, steps)
 
     def separated(rows: list) -> bool:
         return rows[-1][1] < 0.0 and rows[-1][2] < SEPARATION_FRACTION * n0
 
+    # times from the end of the self-weight stage: its force is held to t0, then ramped to the pull
+    since = t0 - sw.duration_s
+    held = [(since, sw.force_N)] if since > 0.5 * sw.dt_s else []
+
     def pull_alone(factor: float) -> list:
         problem.load.shaker = None
-        problem.load.static_axial = StaticForceSettings(
-            (duration_s,), (factor * abs(sw.force_N),)
-        ).history(sw)
+        times, forces = zip(*held, (max(since, 0.0) + duration_s, factor * abs(sw.force_N)))
+        problem.load.static_axial = StaticForceSettings(times, forces).history(sw)
         checkpoint.restore(saved, problem)
         problem.reset_operator()
         rows = [_state(model)]
@@ -146,7 +160,7 @@ def dismount_runs(
             "mu_d": pull_out_force(n0, friction.mu_d, alpha),
             "mu_s": pull_out_force(n0, friction.mu_s, alpha),
         },
-        "natural_Hz": [float(f) for f in np.asarray(joint.frequencies_hz)],
+        "natural_Hz": [float(f) for f in np.asarray(natural_Hz)],
         "branches": branches,
         "wall_s": time.perf_counter() - wall,
     }

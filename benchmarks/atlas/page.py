@@ -15,10 +15,14 @@ The observations of docs/physics.md §5 run on one joint, each against its crite
 written by
 
     mpirun -n 2 python benchmarks/scenarios.py --all          # or a list: S1 S8
+    mpirun -n 2 python benchmarks/scenarios.py --all --installed output/install
 
 which runs the scenarios, keeps each one's outputs in `output/atlas/<scenario>/` (runs that
 scenarios share, in `output/atlas/runs/`, are made once) and rebuilds this page from all the
-scenarios found there. A verdict is "reproduced" or "not reproduced" where the criterion is a
+scenarios found there. With `--installed RUN` (the output folder of a `demos/install.py` run
+of the same case on as many ranks), S5 and S8 also start from the installed state: the run's
+last checkpoint, after its last completed stage. The installation run's own time is not in
+the wall times below (docs/install.md, "Cost"). A verdict is "reproduced" or "not reproduced" where the criterion is a
 test, "measured" where it is a figure to report. Wall times are on {ranks} MPI rank(s) of the
 machine that ran it.
 """

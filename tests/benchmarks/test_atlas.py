@@ -1,6 +1,7 @@
 """The scenario atlas (benchmarks/scenarios.py) on the tiny joint: it runs a list of scenarios,
 makes the runs they share once, and rebuilds its page from every outcome in its output folder;
-bad requests are refused before anything runs. (The tiny joint's verdicts say nothing about the
+S5 and S8 also start from the last checkpoint of an installation run; bad requests are refused
+before anything runs. (The tiny joint's verdicts say nothing about the
 physics; docs/scenarios.md has the converged joint's.)"""
 
 import json
@@ -10,12 +11,19 @@ from mpi4py import MPI
 
 from benchmarks.atlas.catalogue import SCENARIOS
 from benchmarks.scenarios import main
+from solver.installation.runner import Installation
 
 pytestmark = pytest.mark.mpi
 
 
-def test_atlas_runs_scenarios_and_rebuilds_its_page(shared_dir):
-    out = shared_dir("atlas")
+@pytest.fixture(scope="module")
+def atlas_output(shared_dir):
+    """The atlas's output folder of this module: its runs are kept and reused."""
+    return shared_dir("atlas")
+
+
+def test_atlas_runs_scenarios_and_rebuilds_its_page(atlas_output):
+    out = atlas_output
     page = out / "page.md"
     common = ["--case", "tiny", "--output", str(out / "runs_of"), "--docs", str(page)]
     assert main(["S1", *common]) == 0
@@ -43,6 +51,48 @@ def test_atlas_runs_scenarios_and_rebuilds_its_page(shared_dir):
     assert all(f"| {k}:" in not_yet for k, s in SCENARIOS.items() if s.run is None)
 
 
+@pytest.fixture(scope="module")
+def installed(tiny_case, shared_dir):
+    """The output folder of an installation run of the tiny joint."""
+    out = shared_dir("installed")
+    Installation(MPI.COMM_WORLD, tiny_case(), out, progress=False).run()
+    return out
+
+
+def test_s5_s8_from_the_installed_state(installed, atlas_output):
+    out = atlas_output / "runs_of"  # the settled-state runs of the test above are reused
+    page = atlas_output / "page_installed.md"
+    argv = ["S5", "S8", "--case", "tiny", "--output", str(out), "--docs", str(page)]
+    assert main([*argv, "--installed", str(installed)]) == 0
+    MPI.COMM_WORLD.Barrier()
+    manifest = json.loads((installed / "checkpoint" / "manifest.json").read_text())
+    r = json.loads((out / "runs" / "dismount_installed" / "run.json").read_text())
+    assert r["request"]["installed"] == str(installed)
+    assert r["settled"]["time_s"] == pytest.approx(manifest["time_s"])
+    assert r["natural_Hz"] == manifest["natural_frequencies_Hz"]
+    t0 = r["branches"]["pull 1 x"]["rows"][0][0]
+    assert t0 == pytest.approx(manifest["time_s"])  # the pull starts from the installed state
+    text = page.read_text()
+    assert f"installed (t = {manifest['time_s']:.2f} s): pull alone" in text
+    assert "settled by self-weight: pull alone" in text
+    assert (atlas_output / "figures" / "scenarios" / "S5_dismount_installed.png").exists()
+    modes = json.loads((out / "runs" / "modes_installed" / "run.json").read_text())
+    assert modes["time_s"] == pytest.approx(manifest["time_s"])
+    assert len(modes["frequencies_Hz"]) == len(modes["bonded_Hz"]) == 10
+    assert f"(t = {manifest['time_s']:.2f} s) against the end of self-weight" in text
+
+
+def test_installed_state_of_another_case_is_refused(installed, shared_dir, capsys):
+    refused = shared_dir("atlas_installed_refused")
+    argv = ["S5", "--case", "tiny", "--output", str(refused), "--docs", str(refused / "page.md")]
+    assert main([*argv, "--set", "friction.mu_s=0.1", "--installed", str(installed)]) == 2
+    if MPI.COMM_WORLD.rank == 0:
+        assert (
+            "is of another case (run -> now): friction.mu_s: 0.0 -> 0.1" in capsys.readouterr().err
+        )
+    assert not (refused / "page.md").exists()
+
+
 @pytest.mark.parametrize(
     "argv, message",
     [
@@ -50,6 +100,7 @@ def test_atlas_runs_scenarios_and_rebuilds_its_page(shared_dir):
         ([], "no scenario given"),
         (["S2"], "S2 not in the atlas yet"),
         (["S1", "--case", "no_such_case"], "error:"),
+        (["S5", "--case", "tiny", "--installed", "no_such_run"], "error: no checkpoint in"),
     ],
 )
 def test_atlas_refuses_bad_requests(argv, message, capsys, shared_dir):

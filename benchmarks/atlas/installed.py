@@ -1,0 +1,94 @@
+"""The installed state of the atlas: the last checkpoint of an installation run of the case
+(``demos/install.py``, the state after its last completed stage), checked against the case,
+restored, and the natural frequencies of the joint in that state (docs/physics.md §5.8).
+
+A modal run is kept as ``run.json`` in its folder (a later call with the same request reads it).
+"""
+
+import json
+import time
+from pathlib import Path
+from typing import Any
+
+from mpi4py import MPI
+
+from benchmarks.atlas.self_weight import N_MODES, contact_height
+from common.case import read_case
+from solver.installation import checkpoint
+from solver.installation.case import InstallationCase, case_differences
+from solver.installation.frequencies import Excitation
+from solver.installation.model import JointModel, set_up_joint_model, settled_modes
+from solver.modal.eigen import EigenOptions, modal_analysis
+from solver.modal.interface import bonded_band
+
+__all__ = ["installed_modes", "installed_state", "restore_installed"]
+
+
+def installed_state(comm: MPI.Comm, case: InstallationCase, run_folder: Path) -> dict[str, Any]:
+    """The manifest of the last checkpoint of the installation run in ``run_folder``
+    (collective). ValueError where there is none, it was written on another number of ranks or
+    the run was of another case (its ``[output]`` table aside)."""
+    folder = run_folder / "checkpoint"
+    manifest = checkpoint.read_manifest(folder, comm)
+    differences = [
+        d
+        for d in case_differences(manifest.get("case", {}), case.fingerprint())
+        if not d.startswith("output.")  # what a run writes does not change its state
+    ]
+    if differences:
+        raise ValueError(
+            f"the installation run in {run_folder} is of another case (run -> now): "
+            f"{', '.join(differences)}"
+        )
+    return manifest
+
+
+def restore_installed(
+    comm: MPI.Comm, case_name: str, overrides: list[str], run_folder: Path
+) -> tuple[JointModel, list[Excitation], list[float]]:
+    """The joint restored from the last checkpoint of the installation run in ``run_folder``,
+    that run's excitations and natural frequencies [Hz] (collective)."""
+    case = InstallationCase.from_dict(read_case(case_name, overrides))
+    manifest = installed_state(comm, case, run_folder)
+    model = set_up_joint_model(comm, case)
+    checkpoint.restore(run_folder / "checkpoint", model.problem)
+    excitations = [Excitation(**e) for e in manifest["excitations"]]
+    return model, excitations, manifest["natural_frequencies_Hz"]
+
+
+def installed_modes(
+    comm: MPI.Comm, case_name: str, overrides: list[str], folder: Path, run_folder: Path
+) -> dict[str, Any]:
+    """The natural frequencies [Hz] of the joint in the installed state of ``run_folder`` and
+    of the joint with a bonded band as high as its contact. Returns (and keeps in
+    ``folder``/run.json) them with the state's time [s], settlement [mm] and contact height
+    [m], and the wall time [s] (collective)."""
+    path = folder / "run.json"
+    request = {"case": case_name, "overrides": overrides, "installed": str(run_folder)}
+    if path.exists():
+        kept = json.loads(path.read_text())
+        if kept["request"] == request:
+            return kept
+    wall = time.perf_counter()
+    model, _, _ = restore_installed(comm, case_name, overrides, run_folder)
+    case, problem = model.case, model.problem
+    frequencies = settled_modes(model, N_MODES)[0].frequencies_hz
+    height = contact_height(model)
+    band = bonded_band(model.V, model.mesh_data.facet_tags, case.material, max(height, 1e-3))
+    bonded = modal_analysis(
+        model.V, case.material, model.bcs, [band], EigenOptions(n_modes=N_MODES)
+    ).frequencies_hz
+    result = {
+        "request": request,
+        "name": folder.name,
+        "time_s": problem.t,
+        "settlement_mm": model.settlement(problem)["settlement_mm"],
+        "frequencies_Hz": frequencies.tolist(),
+        "contact_height_m": height,
+        "bonded_Hz": bonded.tolist(),
+        "wall_s": time.perf_counter() - wall,
+    }
+    if comm.rank == 0:
+        folder.mkdir(parents=True, exist_ok=True)
+        path.write_text(json.dumps(result))
+    return result
