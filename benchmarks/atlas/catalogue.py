@@ -172,6 +172,17 @@ def _dismount_rows(r: dict[str, Any], state: str) -> list[Row]:
                 verdict(branch["separated"] == wanted),
             )
         )
+    lift = {k: b[k]["rows"][0][1] - b[k]["rows"][-1][1] for k in ("modal", "control")}
+    rows.append(
+        Row(
+            f"{state}: pull + vibration lifts the TP more at the best mode than at the control",
+            f"{lift['modal']:.3f} mm against {lift['control']:.3f} mm "
+            f"({lift['modal'] / lift['control']:.1f} x)"
+            if lift["control"] > 0
+            else f"{lift['modal']:.3f} mm against {lift['control']:.3f} mm",
+            "measured",
+        )
+    )
     rows.append(
         Row(
             f"{state}: resonance-selective release: the modal branch releases, the control "
