@@ -4,7 +4,7 @@ docs/scenarios.md (``benchmarks/atlas``).
     mpirun -n 2 python benchmarks/scenarios.py --all                # every scenario in the atlas
     mpirun -n 2 python benchmarks/scenarios.py S1 S8                # a list
     mpirun -n 2 python benchmarks/scenarios.py S1 --case tiny --docs /tmp/atlas.md
-    mpirun -n 2 python benchmarks/scenarios.py S5 S8 --installed output/install   # + installed state
+    mpirun -n 2 python benchmarks/scenarios.py S2 S5 S8 --installed output/install  # + installed state
 
 The joint is ``--case`` (default ``scaled``: the converged joint, 48 around, P2) with
 ``--set`` overrides. Each scenario prints its wall time; the page is rebuilt from every outcome
@@ -38,15 +38,27 @@ def main(argv=None) -> int:
         "--installed",
         type=Path,
         metavar="RUN",
-        help="output folder of a demos/install.py run of the case on as many ranks: S5 also "
-        "dismounts from its last checkpoint, S8 also has the frequencies there",
+        help="output folder of a demos/install.py run of the case on as many ranks: S2 reads "
+        "its stages, S5 also dismounts from its last checkpoint, S8 also has the frequencies "
+        "there",
     )
     a = p.parse_args(argv)
     comm = MPI.COMM_WORLD
-    keys = [k for k, s in SCENARIOS.items() if s.run is not None] if a.all else a.scenarios
+    keys = (
+        [
+            k
+            for k, s in SCENARIOS.items()
+            if s.run is not None and (a.installed is not None or not s.installed)
+        ]
+        if a.all
+        else a.scenarios
+    )
     unknown = [k for k in keys if k not in SCENARIOS]
     pending = [k for k in keys if k in SCENARIOS and SCENARIOS[k].run is None]
-    if not keys or unknown or pending:
+    uninstalled = [
+        k for k in keys if a.installed is None and k in SCENARIOS and SCENARIOS[k].installed
+    ]
+    if not keys or unknown or pending or uninstalled:
         message = (
             f"unknown scenario(s) {', '.join(unknown)}; "
             if unknown
@@ -54,6 +66,9 @@ def main(argv=None) -> int:
             if not keys
             else f"{', '.join(pending)} not in the atlas yet (needs "
             f"{SCENARIOS[pending[0]].needs}); "
+            if pending
+            else f"{', '.join(uninstalled)} read(s) an installation run of the case: "
+            "--installed RUN; "
         )
         if comm.rank == 0:
             print(

@@ -5,7 +5,7 @@ from pathlib import Path
 
 import numpy as np
 
-__all__ = ["plot_branches", "plot_frequencies", "plot_settlement"]
+__all__ = ["plot_branches", "plot_frequencies", "plot_sequence", "plot_settlement"]
 
 
 def _pyplot():
@@ -72,6 +72,67 @@ def plot_branches(branches: dict[str, list], path: Path, title: str) -> None:
     ax.legend(loc="lower left", fontsize=8)
     ax2.set_xlabel("time [s]")
     ax2.set_ylabel("contact normal force [kN]")
+    fig.tight_layout()
+    fig.savefig(path, dpi=120)
+    plt.close(fig)
+
+
+#: shading of the stages of an installation run, by role
+ROLE_COLOURS = {
+    "self-weight": "0.8",
+    "lead-in": "tab:orange",
+    "modal": "tab:green",
+    "control": "tab:red",
+}
+
+
+def plot_sequence(
+    history: list[dict],
+    stages: list[dict],
+    roles: list[str],
+    natural_hz: list[float],
+    path: Path,
+    title: str,
+) -> None:
+    """Left: settlement [mm] and excitation frequency [Hz] against time [s], the stages shaded
+    by role; right: the settlement gained per vibration stage [um] against its frequency [Hz],
+    the natural frequencies of the settled joint marked. ``history``/``stages``: an
+    installation run's rows; ``roles``: each stage's role (self-weight, lead-in, modal,
+    control)."""
+    plt = _pyplot()
+    fig, (ax, ax_f) = plt.subplots(1, 2, figsize=(13, 4.5), gridspec_kw={"width_ratios": [3, 2]})
+    t = np.array([r["time_s"] for r in history])
+    ax.plot(t, [r["settlement_mm"] for r in history], "k-", lw=1)
+    ax.set_xlabel("time [s]")
+    ax.set_ylabel("settlement [mm]")
+    twin = ax.twinx()
+    twin.plot(t, [r["frequency_Hz"] for r in history], color="tab:blue", lw=0.8)
+    twin.set_ylabel("excitation frequency [Hz]", color="tab:blue")
+    seen = set()
+    for s, role in zip(stages, roles):
+        label = role if role not in seen else None
+        ax.axvspan(s["start_s"], s["end_s"], color=ROLE_COLOURS[role], alpha=0.2, label=label)
+        seen.add(role)
+    ax.legend(loc="lower right", fontsize=8)
+    ax.set_title(title)
+    vibration = [(s, role) for s, role in zip(stages, roles) if s["frequency_Hz"] > 0]
+    for s, role in vibration:
+        ax_f.bar(s["frequency_Hz"], 1e3 * s["gained_mm"], width=4.0, color=ROLE_COLOURS[role])
+        ax_f.annotate(
+            f"{1e3 * s['gained_mm']:.0f}",
+            (s["frequency_Hz"], 1e3 * s["gained_mm"]),
+            ha="center",
+            va="bottom",
+            fontsize=8,
+        )
+    top = max([s["frequency_Hz"] for s, _ in vibration], default=100.0) * 1.1
+    for k, fn in enumerate(f for f in natural_hz if f <= top):
+        label = "natural frequency (settled)" if k == 0 else None
+        ax_f.axvline(fn, color="tab:blue", ls=":", lw=0.8, label=label)
+    ax_f.set_yscale("log")
+    ax_f.set_xlabel("excitation frequency [Hz]")
+    ax_f.set_ylabel("settlement gained in the stage [um]")
+    ax_f.legend(loc="upper right", fontsize=8)
     fig.tight_layout()
     fig.savefig(path, dpi=120)
     plt.close(fig)

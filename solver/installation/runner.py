@@ -393,8 +393,7 @@ class Installation:
                 bar = self._bar(self.plans[-1].end_s - model.problem.t)
                 for index in range(next_stage, len(self.plans)):
                     self._run_stage(index, next_chunk if index == next_stage else 0, writer, bar)
-                    if index + 1 < len(self.plans):
-                        self._checkpoint(index + 1, 0)
+                    self._checkpoint(index + 1, 0)  # after the last: the installed state
         except _Stopped:
             return {}
         finally:

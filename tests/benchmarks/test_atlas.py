@@ -1,7 +1,7 @@
 """The scenario atlas (benchmarks/scenarios.py) on the tiny joint: it runs a list of scenarios,
 makes the runs they share once, and rebuilds its page from every outcome in its output folder;
-S5 and S8 also start from the last checkpoint of an installation run; bad requests are refused
-before anything runs. (The tiny joint's verdicts say nothing about the
+S2 reads the stages of an installation run, S5 and S8 also start from its last checkpoint; bad
+requests are refused before anything runs. (The tiny joint's verdicts say nothing about the
 physics; docs/scenarios.md has the converged joint's.)"""
 
 import json
@@ -62,7 +62,7 @@ def installed(tiny_case, shared_dir):
 def test_s5_s8_from_the_installed_state(installed, atlas_output):
     out = atlas_output / "runs_of"  # the settled-state runs of the test above are reused
     page = atlas_output / "page_installed.md"
-    argv = ["S5", "S8", "--case", "tiny", "--output", str(out), "--docs", str(page)]
+    argv = ["S2", "S5", "S8", "--case", "tiny", "--output", str(out), "--docs", str(page)]
     assert main([*argv, "--installed", str(installed)]) == 0
     MPI.COMM_WORLD.Barrier()
     manifest = json.loads((installed / "checkpoint" / "manifest.json").read_text())
@@ -80,6 +80,14 @@ def test_s5_s8_from_the_installed_state(installed, atlas_output):
     assert modes["time_s"] == pytest.approx(manifest["time_s"])
     assert len(modes["frequencies_Hz"]) == len(modes["bonded_Hz"]) == 10
     assert f"(t = {manifest['time_s']:.2f} s) against the end of self-weight" in text
+    s2 = text.split("| S2: reference sequence")[1].split("| S5:")[0]
+    vibration = [s for s in manifest["stages"] if s["stage"] >= 1]
+    assert len(vibration) == 2  # the tiny case's sequence: one mode and the control
+    for s in vibration:  # S2's rows are the run's stages
+        assert f"{s['name']} at " in s2
+        assert f"gained {1e3 * s['gained_mm']:.1f} um" in s2
+    assert "2 of 2 vibration stages" in s2
+    assert (atlas_output / "figures" / "scenarios" / "S2_sequence.png").exists()
 
 
 def test_installed_state_of_another_case_is_refused(installed, shared_dir, capsys):
@@ -98,7 +106,8 @@ def test_installed_state_of_another_case_is_refused(installed, shared_dir, capsy
     [
         (["S9"], "unknown scenario(s) S9"),
         ([], "no scenario given"),
-        (["S2"], "S2 not in the atlas yet"),
+        (["S3"], "S3 not in the atlas yet"),
+        (["S2", "--case", "tiny"], "S2 read(s) an installation run of the case: --installed"),
         (["S1", "--case", "no_such_case"], "error:"),
         (["S5", "--case", "tiny", "--installed", "no_such_run"], "error: no checkpoint in"),
     ],

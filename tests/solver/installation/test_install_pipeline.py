@@ -16,6 +16,7 @@ import numpy as np
 import pytest
 from mpi4py import MPI
 
+from solver.installation import checkpoint
 from solver.installation.runner import Installation
 
 pytestmark = pytest.mark.mpi
@@ -79,6 +80,11 @@ def test_pipeline_settles_and_writes_outputs(uninterrupted):
         for k in range(1, len(stages) + 1):
             assert (out / f"contact_{k}.vtp").is_file() and (out / f"displacement_{k}.bp").is_dir()
         assert "total settlement" in (out / "summary.txt").read_text()
+    # the last checkpoint is the installed state: the end of the last stage
+    manifest = checkpoint.read_manifest(out / "checkpoint", comm)
+    assert manifest["next_stage"] == len(stages) and manifest["next_chunk"] == 0
+    assert manifest["time_s"] == pytest.approx(runner.model.problem.t)
+    assert [s["name"] for s in manifest["stages"]] == [s["name"] for s in stages]
 
 
 def test_resume_equals_uninterrupted(uninterrupted, tiny_case, shared_dir):
