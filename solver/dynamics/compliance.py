@@ -89,7 +89,8 @@ class ContactCompliance:
         zone_dofs: the zone's global dofs (of the full space) in zone order, on every rank.
         lu_solver: PETSc factorisation package.
         width: right-hand sides per multiple-right-hand-side solve (fewer when fewer columns are
-            asked for, except with SuperLU_DIST, whose repeated solves need the same width).
+            asked for, except with SuperLU_DIST, whose repeated solves need the same width);
+            MUMPS takes them sparse.
     """
 
     def __init__(self, A: PETSc.Mat, zone_dofs: npt.NDArray, lu_solver: str, width: int = 64):
@@ -99,6 +100,7 @@ class ContactCompliance:
         self.start, self.end = A.getOwnershipRange()
         self.width = width
         self._fixed_width = lu_solver == "superlu_dist"
+        self._sparse = lu_solver == "mumps"  # sparse right-hand sides (solve_columns)
         self.lu = direct_solver(self.comm, A, lu_solver)
         self.lu.setUp()
         self.points = 0  #: contact points of the blocks (all ranks)
@@ -275,15 +277,14 @@ class ContactCompliance:
             BT.destroy()
             row = np.repeat(np.arange(len(indptr) - 1), np.diff(indptr))
 
-        def fill(block: npt.NDArray, c0: int, c1: int) -> None:
+        def entries(c0: int, c1: int):
             if B is not None:
                 inside = (indices >= c0) & (indices < c1)
-                block[row[inside], indices[inside] - c0] = values[inside]
-            else:
-                j = np.arange(unit + c0, unit + c1)
-                rows = self._band_zone[j]
-                mine = (rows >= self.start) & (rows < self.end)
-                block[rows[mine] - self.start, j[mine] - unit - c0] = 1.0
+                return row[inside], indices[inside] - c0, values[inside]
+            j = np.arange(unit + c0, unit + c1)
+            rows = self._band_zone[j]
+            mine = (rows >= self.start) & (rows < self.end)
+            return rows[mine] - self.start, j[mine] - unit - c0, np.ones(np.count_nonzero(mine))
 
         EX: list[npt.NDArray] = []
         FX: list[npt.NDArray] = []
@@ -301,7 +302,7 @@ class ContactCompliance:
 
         factor = self.lu.getPC().getFactorMatrix()
         width = self.width if self._fixed_width else max(1, min(self.width, n))
-        solve_columns(factor, self.A, n, fill, consume, width)
+        solve_columns(factor, self.A, n, entries, consume, width, self._sparse)
         self.solves += n
         m = 3 * self.points
         return (

@@ -216,6 +216,7 @@ class BulkCondensation:
                 )
             )
         self._zone_marker, self._chunk = zone, chunk
+        self._sparse = lu_solver == "mumps"  # sparse right-hand sides (solve_columns)
         self.A_hat: PETSc.Mat | None = None
         self._condense(A)
 
@@ -239,8 +240,9 @@ class BulkCondensation:
         columns = R.getDenseArray()  # this rank's rows of all interface columns
         rows = []
 
-        def fill(block: npt.NDArray, c0: int, c1: int) -> None:
-            block[:, : c1 - c0] = columns[:, c0:c1]
+        def entries(c0: int, c1: int):
+            rows, cols = np.nonzero(columns[:, c0:c1])
+            return rows, cols, columns[rows, c0 + cols]
 
         def consume(X: PETSc.Mat, c0: int, c1: int) -> None:
             Y = part.A_ik.matMult(X)
@@ -248,7 +250,7 @@ class BulkCondensation:
             Y.destroy()
 
         factor = part.ksp.getPC().getFactorMatrix()
-        solve_columns(factor, part.A_kk, n_i, fill, consume, min(self._chunk, n_i))
+        solve_columns(factor, part.A_kk, n_i, entries, consume, min(self._chunk, n_i), self._sparse)
         R.destroy()
         return np.hstack(rows) if rows else np.zeros((len(part.interface), 0))
 

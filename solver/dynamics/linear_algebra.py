@@ -3,7 +3,8 @@ preconditioner of A + J_c and the operator A + J without products with A (PETSc 
 contexts).
 """
 
-from collections.abc import Callable
+from collections.abc import Callable, Sequence
+from typing import cast
 
 import numpy as np
 import numpy.typing as npt
@@ -37,31 +38,71 @@ def solve_columns(
     factor: PETSc.Mat,
     A: PETSc.Mat,
     n: int,
-    fill: Callable[[npt.NDArray, int, int], None],
+    entries: Callable[[int, int], tuple[npt.NDArray, npt.NDArray, npt.NDArray]],
     consume: Callable[[PETSc.Mat, int, int], None],
     width: int,
+    sparse: bool = False,
 ) -> None:
     """Solve A X = B for n columns of B with the LU ``factor`` of A, ``width`` right-hand sides at
-    a time: ``fill(block, c0, c1)`` writes this rank's rows of B's columns c0..c1 into the zeroed
-    dense block (local rows x width), ``consume(X, c0, c1)`` takes the solutions (X's first
-    c1 - c0 columns). Every block has the same width, the last one padded with zero columns:
-    SuperLU_DIST's parallel MatMatSolve corrupts memory when the number of right-hand sides
-    changes between calls."""
-    B = PETSc.Mat().createDense(
-        ((A.getLocalSize()[0], A.getSize()[0]), (PETSc.DECIDE, width)), comm=A.getComm()
-    )
-    B.setUp()
-    X = B.duplicate()
+    a time: ``entries(c0, c1)`` gives this rank's nonzeros of B's columns c0..c1 (local rows,
+    columns counted from c0, values; each entry once), ``consume(X, c0, c1)`` takes the
+    solutions (X's first c1 - c0 columns).
+
+    ``sparse`` (MUMPS only): B is passed as a sparse matrix on the first rank, whose forward
+    substitution MUMPS restricts to the nonzeros' part of the elimination tree (about 1.4 times
+    fewer seconds per column for the compliance blocks of the converged joint than dense).
+    Dense: every block has the same width, the last one padded with zero columns
+    (SuperLU_DIST's parallel MatMatSolve corrupts memory when the number of right-hand sides
+    changes between calls)."""
+    comm = A.getComm()
+    n_local, N = A.getLocalSize()[0], A.getSize()[0]
+    start = A.getOwnershipRange()[0]
+    X = PETSc.Mat().createDense(((n_local, N), (PETSc.DECIDE, width)), comm=comm)
+    X.setUp()
+    B = None if sparse else X.duplicate()
     for c0 in range(0, n, width):
         c1 = min(c0 + width, n)
-        block = B.getDenseArray()
-        block[:] = 0.0
-        fill(block, c0, c1)
-        B.assemble()
-        factor.matSolve(B, X)
+        rows, cols, values = entries(c0, c1)
+        if B is None:
+            Bt = _first_rank_transpose(comm, width, N, start + rows, cols, values)
+            rhs = PETSc.Mat().createTranspose(Bt)
+            factor.matSolve(rhs, X)
+            rhs.destroy()
+            Bt.destroy()
+        else:
+            block = B.getDenseArray()
+            block[:] = 0.0
+            block[rows, cols] = values
+            B.assemble()
+            factor.matSolve(B, X)
         consume(X, c0, c1)
-    B.destroy()
     X.destroy()
+    if B is not None:
+        B.destroy()
+
+
+def _first_rank_transpose(
+    comm: PETSc.Comm, width: int, N: int, rows: npt.NDArray, cols: npt.NDArray, values
+) -> PETSc.Mat:
+    """B^T (width x N, AIJ) of the entries (global rows, columns, values) of every rank, all of
+    it on the first rank (rows and columns), as MUMPS takes a sparse right-hand side."""
+    mpi = comm.tompi4py()
+    gathered = mpi.gather((rows, cols, values), root=0)
+    first = mpi.rank == 0
+    Bt = PETSc.Mat().create(comm=comm)
+    Bt.setSizes(((width if first else 0, width), (N if first else 0, N)))
+    Bt.setType(PETSc.Mat.Type.AIJ)
+    if first:
+        r, c, v = (np.concatenate(a) for a in zip(*gathered))
+    else:
+        r = c = np.zeros(0, dtype=np.int64)
+        v = np.zeros(0)
+    Bt.setPreallocationCOO(
+        cast(Sequence[int], c.astype(PETSc.IntType)), cast(Sequence[int], r.astype(PETSc.IntType))
+    )
+    Bt.setValuesCOO(v)
+    Bt.assemble()
+    return Bt
 
 
 class BlockLU:

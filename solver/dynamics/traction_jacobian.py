@@ -101,7 +101,8 @@ class TractionJacobian:
         """G_aa^T (C order), cached for the last active set."""
         key = active.tobytes()
         if self._block is None or self._block[0] != key:
-            self._block = (key, np.ascontiguousarray(self.rows(active)[:, _dofs(active)]))
+            # take gives C order in one pass (rows[:, dofs] is not C-ordered)
+            self._block = (key, self.rows(active).take(_dofs(active), axis=1))
         return self._block[1]
 
     def _jacobian(self, active: npt.NDArray, D: npt.NDArray) -> npt.NDArray:
