@@ -1,7 +1,8 @@
 """Cost of one vibration stage of the installation run, step by step, from the settled joint.
 
 Sets up the case's joint, settles it under the self-weight stage (ramp and hold with the case's
-settings) or restores that state from ``--checkpoint`` (written there on the first run), then
+settings) or restores that state from ``--checkpoint`` (written there on the first run), or
+starts from the installed state of an installation run (``--installed RUN``), then
 runs ``--steps`` steps of a stage at ``--frequency`` with the case's forcing, direction and
 vibration scheme and the amplitude ``--amplitude`` (N, or "eccentric": the motors' 0.3632 f^2 N).
 A restored state must have been written with the same case and overrides. Prints per step the wall time, Newton
@@ -12,17 +13,21 @@ breakdown (``benchmarks/phase_timer.py``).
     mpirun -n 2 python benchmarks/vibration_stage.py --case scaled --steps 12
     mpirun -n 2 python benchmarks/vibration_stage.py --case scaled --set self_weight.scheme=\\"generalised-alpha\\" \\
         --set self_weight.rho_inf=0 --checkpoint output/settled_scaled_rho0
+    mpirun -n 2 python benchmarks/vibration_stage.py --frequency 320.91 --amplitude 3600 \\
+        --steps 12 --installed output/install
 """
 
 import argparse
 import sys
 import time
+from pathlib import Path
 
 from common import backend  # noqa: F401
 
 import numpy as np
 from mpi4py import MPI
 
+from benchmarks.atlas.installed import restore_installed
 from benchmarks.phase_timer import PhaseTimer
 from common.case import read_case
 from solver.dynamics.loads import Schedule
@@ -46,6 +51,12 @@ def main(argv=None) -> int:
         default=None,
         help="folder of the settled state: restored if it exists, else written after settling",
     )
+    p.add_argument(
+        "--installed",
+        type=Path,
+        metavar="RUN",
+        help="start from the last checkpoint of a demos/install.py run of the case instead",
+    )
     a = p.parse_args(argv)
     if not (a.frequency > 0 and a.steps > 0):
         p.error("--frequency and --steps must be positive")
@@ -53,11 +64,19 @@ def main(argv=None) -> int:
     comm = MPI.COMM_WORLD
     say = print if comm.rank == 0 else (lambda *args, **kw: None)
     case = InstallationCase.from_dict(read_case(a.case, a.set))
-    model = set_up_joint_model(comm, case)
+    if a.installed is not None:
+        try:
+            model = restore_installed(comm, a.case, a.set, a.installed)[0]
+        except (ValueError, FileNotFoundError) as err:
+            p.error(str(err))
+    else:
+        model = set_up_joint_model(comm, case)
     problem = model.problem
     say(f"{a.case}: {model.n_dofs} dofs", flush=True)
     record = {"case": a.case, "overrides": a.set}
-    if a.checkpoint is not None and checkpoint.exists(a.checkpoint, comm):
+    if a.installed is not None:
+        say(f"installed state restored from {a.installed} (t = {problem.t:.3f} s)", flush=True)
+    elif a.checkpoint is not None and checkpoint.exists(a.checkpoint, comm):
         saved = checkpoint.read_manifest(a.checkpoint, comm)
         if {key: saved.get(key) for key in record} != record:
             p.error(
