@@ -82,12 +82,17 @@ def solve_columns(
 
 
 def _first_rank_transpose(
-    comm: PETSc.Comm, width: int, N: int, rows: npt.NDArray, cols: npt.NDArray, values
+    comm: PETSc.Comm,
+    width: int,
+    N: int,
+    rows: npt.NDArray,
+    cols: npt.NDArray,
+    values: npt.NDArray,
 ) -> PETSc.Mat:
     """B^T (width x N, AIJ) of the entries (global rows, columns, values) of every rank, all of
     it on the first rank (rows and columns), as MUMPS takes a sparse right-hand side."""
     mpi = comm.tompi4py()
-    gathered = mpi.gather((rows, cols, values), root=0)
+    gathered = cast(list[tuple[npt.NDArray, ...]], mpi.gather((rows, cols, values), root=0))
     first = mpi.rank == 0
     Bt = PETSc.Mat().create(comm=comm)
     Bt.setSizes(((width if first else 0, width), (N if first else 0, N)))
@@ -100,7 +105,7 @@ def _first_rank_transpose(
     Bt.setPreallocationCOO(
         cast(Sequence[int], c.astype(PETSc.IntType)), cast(Sequence[int], r.astype(PETSc.IntType))
     )
-    Bt.setValuesCOO(v)
+    Bt.setValuesCOO(cast(Sequence[float], v))
     Bt.assemble()
     return Bt
 
