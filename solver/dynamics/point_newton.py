@@ -66,6 +66,20 @@ def _law(y: npt.NDArray, normal: npt.NDArray, mu: npt.NDArray):
     return P_t, multipliers(P_n, P_t, mu)
 
 
+def _residual(
+    jacobian: TractionJacobian,
+    y: npt.NDArray,
+    y_free: npt.NDArray,
+    normal: npt.NDArray,
+    mu: npt.NDArray,
+):
+    """Phi(y) = y - y_free + G lambda(y) [Pa] with the jacobian's G, and P_t and the multipliers
+    at y (as ``_law``; lambda also as a vector, 3 per point)."""
+    P_t, lam = _law(y, normal, mu)
+    lam_y = lam.vector(normal).ravel()
+    return P_t, lam, lam_y, y - y_free + jacobian.times(lam_y, np.flatnonzero(lam.active))
+
+
 def stick_restart(y: npt.NDArray, normal: npt.NDArray, mu: npt.NDArray) -> npt.NDArray:
     """The trial tractions y (3 per point) [Pa] with each slipping point's tangential part pulled
     just inside its friction disk (radius mu p, p = -P_n > 0): those points become stuck."""
@@ -110,10 +124,7 @@ def solve_tractions(
         jacobian.set_compliance(G)
 
     def evaluate(y: npt.NDArray):
-        P_t, lam = _law(y, normal, mu)
-        lam_y = lam.vector(normal).ravel()
-        phi = y - y_free + jacobian.times(lam_y, np.flatnonzero(lam.active))
-        return P_t, lam, lam_y, phi
+        return _residual(jacobian, y, y_free, normal, mu)
 
     y = y0.copy()
     P_t, lam, lam_y, phi = evaluate(y)
@@ -135,12 +146,7 @@ def solve_tractions(
                 lam.stick[active],
                 lam.slip[active],
             )
-            cols = (3 * active[:, None] + np.arange(3)).ravel()
-            dy_a = jacobian.solve(active, D, -phi[cols])
-            w = np.zeros_like(y)  # D dy at the active points
-            w[cols] = (D @ dy_a.reshape(-1, 3, 1)).ravel()
-            dy = -phi - jacobian.times(w, active)
-            dy[cols] = dy_a
+            dy = jacobian.direction(active, D, phi)
         alpha, accepted = 1.0, False
         for _ in range(max_backtracks + 1):
             trial = y + alpha * dy
@@ -228,6 +234,7 @@ class PointNewtonSolver:
         self._G_master: tuple[npt.NDArray, npt.NDArray] | None = None
         #: the inner problem's linear solves; its factors are kept while the points are the same
         self.jacobian = TractionJacobian()
+        self._last_y: npt.NDArray | None = None  # the last inner solution, while its points stay
         self.pairing_rtol = pairing_rtol
         self._candidates = np.zeros(0, dtype=np.int64)  # this rank's candidate points
         self.factorizations = 0  #: LU factorisations of A'
@@ -266,8 +273,32 @@ class PointNewtonSolver:
         zone_dofs = np.concatenate(self._comm.allgather(self._zone.getIndices()))
         self._compliance = ContactCompliance(A_prime, zone_dofs, self.lu_solver)
         self._candidates = np.zeros(0, dtype=np.int64)
-        self.jacobian.reset()
+        self._new_points()
         self.factorizations += 1
+
+    def _new_points(self) -> None:
+        """Other candidates: the inner problem's factors and last solution are dropped."""
+        self.jacobian.reset()
+        self._last_y = None
+
+    def _starts(self, G, y_k, y_free, normal, mu) -> list[npt.NDArray]:
+        """The inner problem's starts, in order: of the iterate's tractions y_k and the last inner
+        solution (points appended since then at y_k) the one with the smaller ||Phi|| first
+        (within a step, y_k; at a new step's first iteration often the last solution, nearer in
+        stick and slip than the predictor's), then the other, then y_free (the tractions if the
+        multipliers kept their values: for every point open, where the first step from y_k
+        closes them all at once)."""
+        if self._last_y is None:
+            return [y_k, y_free]
+        last = y_k.copy()
+        last[: len(self._last_y)] = self._last_y
+        if self.jacobian.G is not G:
+            self.jacobian.set_compliance(G)
+        phi_k, phi_last = (
+            np.abs(_residual(self.jacobian, y, y_free, normal, mu)[3]).max(initial=0.0)
+            for y in (y_k, last)
+        )
+        return [last, y_k, y_free] if phi_last < phi_k else [y_k, last, y_free]
 
     def _update_points(self, contact: NitscheContact) -> None:
         """Fit the candidates and the master band to the contact (collective).
@@ -294,7 +325,7 @@ class PointNewtonSolver:
         if comm.allreduce(bool(np.any(~trial.paired[self._candidates])), op=MPI.LOR):
             compliance.reset()
             self._candidates = np.zeros(0, dtype=np.int64)
-            self.jacobian.reset()
+            self._new_points()
         near = facet_points((gap <= self.candidate_gap) | (P_n <= 0))
         kept = facet_points((gap <= 2 * self.look_ahead * self.candidate_gap) | (P_n <= 0))
         keep = np.isin(self._candidates, kept)
@@ -305,7 +336,7 @@ class PointNewtonSolver:
             needed = self._band_dofs(ops.master_dofs)
             compliance.restrict(ops, keep, np.isin(compliance.band, needed))
             self._G_master = None
-            self.jacobian.reset()
+            self._new_points()
         new = np.setdiff1d(near, self._candidates)
         added = comm.allreduce(len(new), op=MPI.SUM)
         if added:  # those about to come near as well
@@ -423,10 +454,7 @@ class PointNewtonSolver:
             _, lam_k = _law(y_k, normal, mu)
             lam_k = lam_k.vector(normal).ravel()
             y_free = y_k - compliance.apply_E(d_zone, M_b) + G @ lam_k
-            # from the iterate's tractions; if that fails (e.g. every point open, where the first
-            # step closes them all at once), from y_free (the tractions if the multipliers kept
-            # their values)
-            for y0 in (y_k, y_free):
+            for y0 in self._starts(G, y_k, y_free, normal, mu):
                 solution = solve_tractions(
                     G,
                     y_free,
@@ -438,6 +466,7 @@ class PointNewtonSolver:
                     jacobian=self.jacobian,
                 )
                 if solution.converged:
+                    self._last_y = solution.y
                     break
             inner.append(solution.iterations)
             timings["tractions"] += time.perf_counter() - t0

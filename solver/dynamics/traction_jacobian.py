@@ -3,11 +3,20 @@
 the law's derivative D (3 x 3 per point, ``solver.contact.law``).
 
 The Jacobian changes little from one Newton iteration to the next (slip directions turn, a few
-points change state) and little between pairings. FGMRES preconditioned by the single-precision
-LU factors of an earlier Jacobian on the same active set solves the system in a few products
-with G_aa; the factors are renewed when the active set changes or FGMRES does not converge in
-``max_krylov`` iterations (if it fails with new factors too, a double-precision solve). FGMRES
-(flexible) because a solve in single precision is not exactly linear.
+points open or close) and little between pairings. FGMRES preconditioned by the single-precision
+LU factors of an earlier Jacobian J_0 = I + G_00 D_0 (active set a_0) solves the system in a few
+products with G_aa. When the active set a differs from a_0 by a few points, the preconditioner is
+J_0 updated exactly for them (Woodbury): on the union U of a and a_0,
+
+    P = I + G_UU D',   D' = D_0 on a_0 and a, D on the points that closed, 0 on those that opened,
+
+is the reference R = I + G_UU D_r (D_r = D_0 on a_0, 0 elsewhere: block lower triangular, solved
+with the factors of J_0) plus a term of rank 3 |changed points|, G_Uc (D' - D_r)_c. P restricted to
+a is the Jacobian at the present set with D_0 for the points kept, so FGMRES only corrects the
+turning of the slip directions. The factors are renewed when more than ``max_update`` of the
+points changed, or when FGMRES does not converge in ``max_krylov`` iterations (if it fails with
+new factors too, a double-precision solve). FGMRES (flexible) because a solve in single precision
+is not exactly linear.
 """
 
 from typing import cast
@@ -26,48 +35,114 @@ def _dofs(points: npt.NDArray) -> npt.NDArray:
 
 
 class _Operator:
-    """y = x + G_aa (D x) (PETSc python matrix context); ``rows`` is G_aa^T (C order)."""
+    """y = x + G_aa (D x) (PETSc python matrix context); ``rows`` is G_aa^T (C order, single
+    precision: the product is a Newton direction's, its residual is checked in double)."""
 
     def __init__(self, rows: npt.NDArray, D: npt.NDArray):
         self.rows, self.D = rows, D
 
     def mult(self, mat, x, y):
         v = x.array_r
-        y.array[:] = v + (self.D @ v.reshape(-1, 3, 1)).ravel() @ self.rows
+        y.array[:] = v + (self.D @ v.reshape(-1, 3, 1)).ravel().astype(np.float32) @ self.rows
 
 
-class _Factors:
-    """Applies single-precision LU factors (PETSc python preconditioner context)."""
+class _Preconditioner:
+    """Applies a preconditioner ``solve(r) -> z`` (PETSc python preconditioner context)."""
 
-    def __init__(self, lu):
-        self.lu = lu
+    def __init__(self, solve):
+        self.solve = solve
 
     def apply(self, pc, x, y):
-        z = scipy.linalg.lu_solve(self.lu, x.array_r.astype(np.float32), check_finite=False)
-        y.array[:] = z
+        y.array[:] = self.solve(x.array_r)
+
+
+class _Update:
+    """The kept factors of J_0 = I + G_00 D_0 (points a_0) updated to the active set a and to the
+    derivative D at the points ``changed`` (those that opened or closed, and those whose D moved
+    far from D_0): the inverse of P restricted to a (module docstring), for right-hand sides on a."""
+
+    def __init__(self, lu, reference, D_0, active, D, changed, GT):
+        union = np.union1d(reference, active)
+        closed = np.setdiff1d(active, reference)
+        self.lu, self.n = lu, 3 * len(union)
+        self.at_0 = _dofs(np.searchsorted(union, reference))
+        self.at_active = _dofs(np.searchsorted(union, active))
+        self.at_closed = _dofs(np.searchsorted(union, closed))
+        self.at_changed = _dofs(np.searchsorted(union, changed))
+        self.D_0 = D_0
+        # G_{closed, a_0}: the closed points' rows of R below J_0
+        self.G_c0 = GT[np.ix_(_dofs(reference), _dofs(closed))].T.astype(np.float64)
+        # the update's columns G_Uc (D' - D_r)_c, D' = D on a (0 off it), D_r = D_0 on a_0
+        dD = np.zeros((len(changed), 3, 3))
+        in_active = np.isin(changed, active)
+        dD[in_active] = D[np.searchsorted(active, changed[in_active])]
+        in_reference = np.isin(changed, reference)
+        dD[in_reference] -= D_0[np.searchsorted(reference, changed[in_reference])]
+        G_Uc = GT[np.ix_(_dofs(changed), _dofs(union))].T
+        U = np.einsum("uci,cij->ucj", G_Uc.reshape(self.n, -1, 3), dD).reshape(self.n, -1)
+        self.W = self._reference_solve(U)  # R^-1 U
+        capacitance = self.W[self.at_changed]
+        capacitance[np.diag_indices_from(capacitance)] += 1.0
+        self.capacitance = scipy.linalg.lu_factor(capacitance, check_finite=False)
+
+    def _reference_solve(self, r: npt.NDArray) -> npt.NDArray:
+        """R^-1 r for r on U (vector or columns)."""
+        z = r.copy()
+        z[self.at_0] = scipy.linalg.lu_solve(
+            self.lu, r[self.at_0].astype(np.float32), check_finite=False
+        )
+        if len(self.at_closed):
+            z_0 = z[self.at_0]
+            Dz_0 = (self.D_0 @ z_0.reshape(len(self.D_0), 3, -1)).reshape(z_0.shape)
+            z[self.at_closed] -= self.G_c0 @ Dz_0
+        return z
+
+    def solve(self, r: npt.NDArray) -> npt.NDArray:
+        """P^-1 r on the active set (Woodbury)."""
+        r_U = np.zeros(self.n)
+        r_U[self.at_active] = r
+        z = self._reference_solve(r_U)
+        z -= self.W @ scipy.linalg.lu_solve(
+            self.capacitance, z[self.at_changed], check_finite=False
+        )
+        return z[self.at_active]
 
 
 class TractionJacobian:
     """Solves (I + G_aa D_a) dy_a = r for a compliance G (3 np x 3 np) and active points a.
 
     ``G`` is replaced (:meth:`set_compliance`) when the pairing changes; the factors then stay as
-    a preconditioner. Counters: ``factorizations``, ``krylov_iterations`` and ``direct_solves``.
+    a preconditioner. Counters: ``factorizations``, ``updates``, ``krylov_iterations`` and
+    ``direct_solves``.
 
     Args:
         max_krylov: FGMRES iterations with the kept factors before they are renewed.
-        rtol: relative residual of the solves (the Newton iteration checks its own residual, so
-            this only sets how close each step is to the exact Newton step).
+        rtol: relative residual of the solves, at least 1e-6: their products are in single
+            precision (the Newton iteration checks its own residual in double, so this only
+            sets how close each step is to the exact Newton step).
+        max_update: the kept factors are updated for at most this fraction of their points
+            changing (a rank-3 term per point), renewed beyond it.
+        turn: a point whose D differs from the kept factors' by more than this (Frobenius norm;
+            D is dimensionless, I at a stuck point) is updated as changed.
     """
 
-    def __init__(self, max_krylov: int = 30, rtol: float = 1e-6):
+    def __init__(
+        self, max_krylov: int = 30, rtol: float = 1e-6, max_update: float = 0.1, turn: float = 0.25
+    ):
+        if not rtol >= 1e-6:
+            raise ValueError(f"rtol must be >= 1e-6 (single-precision products), got {rtol}")
         self.max_krylov, self.rtol = max_krylov, rtol
+        self.max_update, self.turn = max_update, turn
         self.G: npt.NDArray = np.zeros((0, 0))
         self._GT: npt.NDArray = np.zeros((0, 0))
-        self._rows: dict[bytes, npt.NDArray] = {}  # G^T's rows of an active set
+        self._GT32: npt.NDArray = np.zeros((0, 0), dtype=np.float32)  # for the Newton directions
         self._block: tuple[bytes, npt.NDArray] | None = None  # G_aa^T of the last active set
         self._lu = None
-        self._lu_active: bytes | None = None
+        self._lu_points = np.zeros(0, dtype=np.int64)  # a_0 and D_0 of the kept factors
+        self._lu_D = np.zeros((0, 3, 3))
+        self._update: tuple[bytes, _Update] | None = None  # the factors updated to an active set
         self.factorizations = 0
+        self.updates = 0  #: Woodbury updates of the kept factors to another active set
         self.krylov_iterations = 0
         self.direct_solves = 0  #: double-precision solves where FGMRES with new factors failed
 
@@ -76,56 +151,86 @@ class TractionJacobian:
         as a preconditioner). G in Fortran order is not copied."""
         self.G = G
         self._GT = np.ascontiguousarray(G.T)
-        self._rows.clear()
+        self._GT32 = self._GT.astype(np.float32)
+        self._GT32[np.abs(self._GT) < 1e-20] = 0.0  # no subnormal numbers in single precision
         self._block = None
+        self._update = None
 
     def reset(self) -> None:
         """Other points: no G and no factors (the counters are kept)."""
         self.set_compliance(np.zeros((0, 0)))
-        self._lu, self._lu_active = None, None
-
-    def rows(self, active: npt.NDArray) -> npt.NDArray:
-        """G^T's rows of the ``active`` points (3 |active| x 3 np), cached."""
-        key = active.tobytes()
-        if key not in self._rows:
-            if len(self._rows) > 3:
-                self._rows.clear()
-            self._rows[key] = self._GT[_dofs(active)]
-        return self._rows[key]
+        self._lu = None
 
     def times(self, v: npt.NDArray, active: npt.NDArray) -> npt.NDArray:
         """G v (3 np) for v zero off the ``active`` points."""
-        return v[_dofs(active)] @ self.rows(active)
+        # the whole product: a copy of G's columns of the active points costs more
+        w = np.zeros(len(v))
+        cols = _dofs(active)
+        w[cols] = v[cols]
+        return w @ self._GT
+
+    def direction(self, active: npt.NDArray, D: npt.NDArray, phi: npt.NDArray) -> npt.NDArray:
+        """The Newton direction dy (3 np) with (I + G D) dy = -phi, D (|a|, 3, 3) the law's
+        derivative at the active points (sorted; zero at the others): their block by
+        :meth:`solve`, the other rows explicitly (in single precision, as the block)."""
+        cols = _dofs(active)
+        dy_a = self.solve(active, D, -phi[cols])
+        w = np.zeros(len(phi), dtype=np.float32)  # D dy at the active points
+        w[cols] = (D @ dy_a.reshape(-1, 3, 1)).ravel()
+        dy = -phi - w @ self._GT32
+        dy[cols] = dy_a
+        return dy
 
     def _block_rows(self, active: npt.NDArray) -> npt.NDArray:
-        """G_aa^T (C order), cached for the last active set."""
+        """G_aa^T (C order, single precision), cached for the last active set."""
         key = active.tobytes()
         if self._block is None or self._block[0] != key:
-            # take gives C order in one pass (rows[:, dofs] is not C-ordered)
-            self._block = (key, self.rows(active).take(_dofs(active), axis=1))
+            cols = _dofs(active)
+            self._block = (key, self._GT32[np.ix_(cols, cols)])
         return self._block[1]
 
-    def _jacobian(self, active: npt.NDArray, D: npt.NDArray) -> npt.NDArray:
-        """J = I + G_aa D (Fortran order)."""
-        rows = self._block_rows(active)
+    def _jacobian(self, active: npt.NDArray, D: npt.NDArray, rows: npt.NDArray) -> npt.NDArray:
+        """J = I + G_aa D (Fortran order) from ``rows`` = G_aa^T (C order), in their precision."""
         n = rows.shape[0]
         # J^T = D^T G_aa^T block row by block row; J in Fortran order is its transpose
-        J = (D.transpose(0, 2, 1) @ rows.reshape(len(active), 3, n)).reshape(n, n).T
+        DT = D.transpose(0, 2, 1).astype(rows.dtype)
+        J = (DT @ rows.reshape(len(active), 3, n)).reshape(n, n).T
         J[np.diag_indices_from(J)] += 1.0
         return J
 
     def _factorise(self, active: npt.NDArray, D: npt.NDArray) -> None:
         """Single-precision LU factors of J = I + G_aa D."""
-        J = self._jacobian(active, D)
+        J = self._jacobian(active, D, self._block_rows(active))
         J[np.abs(J) < 1e-20] = 0.0  # no subnormal numbers in single precision: slow
-        self._lu = scipy.linalg.lu_factor(
-            J.astype(np.float32, order="F"), overwrite_a=True, check_finite=False
-        )
-        self._lu_active = active.tobytes()
+        self._lu = scipy.linalg.lu_factor(J, overwrite_a=True, check_finite=False)
+        self._lu_points, self._lu_D = active.copy(), D.copy()
+        self._update = None
         self.factorizations += 1
 
-    def _krylov(self, active: npt.NDArray, D: npt.NDArray, r: npt.NDArray):
-        """FGMRES with the kept factors: the solution and whether it converged."""
+    def _factors(self, active: npt.NDArray, D: npt.NDArray):
+        """The preconditioner's solve from the kept factors for the active set, or None where
+        there are none or too many points changed."""
+        if self._lu is None:
+            return None
+        lu, reference = self._lu, self._lu_points
+        kept, in_active, in_reference = np.intersect1d(
+            active, reference, assume_unique=True, return_indices=True
+        )
+        moved = np.linalg.norm(D[in_active] - self._lu_D[in_reference], axis=(1, 2)) > self.turn
+        changed = np.union1d(np.setxor1d(active, reference, assume_unique=True), kept[moved])
+        if not len(changed):
+            return lambda r: scipy.linalg.lu_solve(lu, r.astype(np.float32), check_finite=False)
+        if len(changed) > self.max_update * len(reference):
+            return None
+        key = active.tobytes() + changed.tobytes()
+        if self._update is None or self._update[0] != key:
+            update = _Update(lu, reference, self._lu_D, active, D, changed, self._GT32)
+            self._update = (key, update)
+            self.updates += 1
+        return self._update[1].solve
+
+    def _krylov(self, active: npt.NDArray, D: npt.NDArray, r: npt.NDArray, preconditioner):
+        """FGMRES with the preconditioner: the solution and whether it converged."""
         n = len(r)
         comm = PETSc.COMM_SELF
         A = PETSc.Mat().createPython((n, n), _Operator(self._block_rows(active), D), comm=comm)
@@ -141,7 +246,7 @@ class TractionJacobian:
             ksp.setTolerances(rtol=self.rtol, atol=0.0, max_it=self.max_krylov)
             pc = ksp.getPC()
             pc.setType(PETSc.PC.Type.PYTHON)
-            pc.setPythonContext(_Factors(self._lu))
+            pc.setPythonContext(_Preconditioner(preconditioner))
             ksp.solve(b, x)
             self.krylov_iterations += ksp.getIterationNumber()
             return x.array_r.copy(), cast(int, ksp.getConvergedReason()) > 0
@@ -151,13 +256,16 @@ class TractionJacobian:
 
     def solve(self, active: npt.NDArray, D: npt.NDArray, r: npt.NDArray) -> npt.NDArray:
         """dy_a with (I + G_aa D) dy_a = r for the active points (sorted) and D (|a|, 3, 3)."""
-        if self._lu is not None and self._lu_active == active.tobytes():
-            dy, converged = self._krylov(active, D, r)
+        preconditioner = self._factors(active, D)
+        if preconditioner is not None:
+            dy, converged = self._krylov(active, D, r, preconditioner)
             if converged:
                 return dy
         self._factorise(active, D)
-        dy, converged = self._krylov(active, D, r)
+        dy, converged = self._krylov(active, D, r, self._factors(active, D))
         if not converged:  # J too ill-conditioned for single-precision factors
             self.direct_solves += 1
-            return scipy.linalg.solve(self._jacobian(active, D), r, check_finite=False)
+            cols = _dofs(active)
+            J = self._jacobian(active, D, self._GT[np.ix_(cols, cols)])
+            return scipy.linalg.solve(J, r, check_finite=False)
         return dy

@@ -5,7 +5,7 @@
   slipping, solved after the stick restart.
 - The inner problem's linear solves (``TractionJacobian``: FGMRES with kept single-precision
   factors) against a dense double-precision solve, with the factors reused for a changed
-  derivative and renewed for another active set.
+  derivative, updated for a few points opening and closing and renewed for another active set.
 - The compliance G of ``ContactCompliance`` (blocks once per operator, the master part per
   pairing) against E A'^-1 F^T W formed densely on the tiny joint's condensed zone.
 - The installation steps of the quick frictional joint (self-weight ramp, then eccentric
@@ -84,11 +84,15 @@ def test_stalled_slip_restarts_stuck():
 
 
 def test_reused_factors_against_dense_solve():
+    """Each solve against a dense double-precision solve (to the single precision of the solves):
+    the first factorises; a turned derivative, more points appended to G and a few points opening
+    and closing reuse the factors (the last by a low-rank update); another active set renews
+    them."""
     rng = np.random.default_rng(3)
     n = 50
     G = rng.uniform(0.0, 1.0, (3 * n, 3 * n))
     G = 50.0 * G @ G.T / n  # compliance-like: symmetric positive, entries of tens
-    jacobian = TractionJacobian(rtol=1e-12)
+    jacobian = TractionJacobian()
     jacobian.set_compliance(G)
 
     def derivative(points):
@@ -96,17 +100,18 @@ def test_reused_factors_against_dense_solve():
         normal /= np.linalg.norm(normal, axis=1)[:, None]
         return normal[:, :, None] * normal[:, None, :] + 0.3 * np.eye(3)
 
-    def dense(active, D):
+    def check(active, D):
         cols = (3 * active[:, None] + np.arange(3)).ravel()
-        return np.eye(len(cols)) + G[np.ix_(cols, cols)] @ scipy.linalg.block_diag(*D)
+        J = np.eye(len(cols)) + G[np.ix_(cols, cols)] @ scipy.linalg.block_diag(*D)
+        r = rng.normal(size=len(cols))
+        dy = jacobian.solve(active, D, r)
+        assert np.allclose(J @ dy, r, rtol=0, atol=1e-5 * np.abs(r).max())
 
     active = np.sort(rng.choice(n, 30, replace=False))
     D_0 = derivative(active)
     turned = D_0 + 0.02 * rng.normal(size=D_0.shape)  # e.g. slip directions turned
     for D in (D_0, turned):  # the second with the first's factors
-        r = rng.normal(size=3 * len(active))
-        dy = jacobian.solve(active, D, r)
-        assert np.allclose(dense(active, D) @ dy, r, rtol=0, atol=1e-10 * np.abs(r).max())
+        check(active, D)
     assert jacobian.factorizations == 1 and jacobian.krylov_iterations > 2
     # more points appended (an extension of the compliance blocks): the factors stay
     extended = np.zeros((3 * n + 6, 3 * n + 6), order="F")
@@ -114,14 +119,20 @@ def test_reused_factors_against_dense_solve():
     extended[3 * n :, :] = 1.0
     extended[:, 3 * n :] = 1.0
     jacobian.set_compliance(extended)
-    dy = jacobian.solve(active, turned, r)
-    assert np.allclose(dense(active, turned) @ dy, r, rtol=0, atol=1e-10 * np.abs(r).max())
+    check(active, turned)
     assert jacobian.factorizations == 1
+    # one point opens, two close (3 of 30 points: within max_update): updated factors
+    opened = active[7]
+    closed = rng.choice(np.setdiff1d(np.arange(n), active), 2, replace=False)
+    changed = np.sort(np.concatenate([np.setdiff1d(active, [opened]), closed]))
+    D = np.empty((len(changed), 3, 3))
+    kept = np.isin(changed, active)
+    D[kept] = turned[np.searchsorted(active, changed[kept])]
+    D[~kept] = derivative(closed)
+    check(changed, D)
+    assert jacobian.factorizations == 1 and jacobian.updates == 1
     other = np.sort(rng.choice(n, 20, replace=False))
-    D = derivative(other)
-    r = rng.normal(size=3 * len(other))
-    dy = jacobian.solve(other, D, r)
-    assert np.allclose(dense(other, D) @ dy, r, rtol=0, atol=1e-10 * np.abs(r).max())
+    check(other, derivative(other))
     assert jacobian.factorizations == 2
 
 
