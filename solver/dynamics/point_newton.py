@@ -36,7 +36,7 @@ from petsc4py import PETSc
 
 import dolfinx
 
-from solver.contact.law import derivative, multipliers
+from solver.contact.law import Multipliers, derivative, multipliers
 from solver.contact.model import ContactModel, Status
 from solver.contact.nitsche import NitscheContact
 from solver.dynamics.compliance import ContactCompliance
@@ -72,7 +72,7 @@ def _residual(
     y_free: npt.NDArray,
     normal: npt.NDArray,
     mu: npt.NDArray,
-):
+) -> tuple[npt.NDArray, Multipliers, npt.NDArray, npt.NDArray]:
     """Phi(y) = y - y_free + G lambda(y) [Pa] with the jacobian's G, and P_t and the multipliers
     at y (as ``_law``; lambda also as a vector, 3 per point)."""
     P_t, lam = _law(y, normal, mu)
@@ -120,8 +120,7 @@ def solve_tractions(
     """
     if jacobian is None:
         jacobian = TractionJacobian()
-    if jacobian.G is not G:
-        jacobian.set_compliance(G)
+    jacobian.set_compliance(G)
 
     def evaluate(y: npt.NDArray):
         return _residual(jacobian, y, y_free, normal, mu)
@@ -281,7 +280,14 @@ class PointNewtonSolver:
         self.jacobian.reset()
         self._last_y = None
 
-    def _starts(self, G, y_k, y_free, normal, mu) -> list[npt.NDArray]:
+    def _starts(
+        self,
+        G: npt.NDArray,
+        y_k: npt.NDArray,
+        y_free: npt.NDArray,
+        normal: npt.NDArray,
+        mu: npt.NDArray,
+    ) -> list[npt.NDArray]:
         """The inner problem's starts, in order: of the iterate's tractions y_k and the last inner
         solution (points appended since then at y_k) the one with the smaller ||Phi|| first
         (within a step, y_k; at a new step's first iteration often the last solution, nearer in
@@ -292,8 +298,7 @@ class PointNewtonSolver:
             return [y_k, y_free]
         last = y_k.copy()
         last[: len(self._last_y)] = self._last_y
-        if self.jacobian.G is not G:
-            self.jacobian.set_compliance(G)
+        self.jacobian.set_compliance(G)
         phi_k, phi_last = (
             np.abs(_residual(self.jacobian, y, y_free, normal, mu)[3]).max(initial=0.0)
             for y in (y_k, last)

@@ -5,20 +5,23 @@ the law's derivative D (3 x 3 per point, ``solver.contact.law``).
 The Jacobian changes little from one Newton iteration to the next (slip directions turn, a few
 points open or close) and little between pairings. FGMRES preconditioned by the single-precision
 LU factors of an earlier Jacobian J_0 = I + G_00 D_0 (active set a_0) solves the system in a few
-products with G_aa. When the active set a differs from a_0 by a few points, the preconditioner is
-J_0 updated exactly for them (Woodbury): on the union U of a and a_0,
+products with G_aa. When the active set a differs from a_0 by a few points, or a few points'
+derivatives moved far from D_0 (between stick and slip), the preconditioner is J_0 updated for
+them (Woodbury; exactly for the G the factors were made with): on the union U of a and a_0,
 
-    P = I + G_UU D',   D' = D_0 on a_0 and a, D on the points that closed, 0 on those that opened,
+    P = I + G_UU D',   D' = D at the changed points of a (closed or moved), 0 at those that
+                       opened, D_0 at the other points of a_0,
 
 is the reference R = I + G_UU D_r (D_r = D_0 on a_0, 0 elsewhere: block lower triangular, solved
 with the factors of J_0) plus a term of rank 3 |changed points|, G_Uc (D' - D_r)_c. P restricted to
-a is the Jacobian at the present set with D_0 for the points kept, so FGMRES only corrects the
-turning of the slip directions. The factors are renewed when more than ``max_update`` of the
-points changed, or when FGMRES does not converge in ``max_krylov`` iterations (if it fails with
-new factors too, a double-precision solve). FGMRES (flexible) because a solve in single precision
-is not exactly linear.
+a is the Jacobian at the present set with D_0 at the points kept and the changed points' D of
+when the update was made, so FGMRES only corrects the smaller turns of the slip directions. The
+factors are renewed when more than ``max_update`` of the points changed, or when FGMRES does not
+converge in ``max_krylov`` iterations (if it fails with new factors too, a double-precision
+solve). FGMRES (flexible) because a solve in single precision is not exactly linear.
 """
 
+from collections.abc import Callable
 from typing import cast
 
 import numpy as np
@@ -27,6 +30,8 @@ import scipy.linalg
 from petsc4py import PETSc
 
 __all__ = ["TractionJacobian"]
+
+Solve = Callable[[npt.NDArray], npt.NDArray]
 
 
 def _dofs(points: npt.NDArray) -> npt.NDArray:
@@ -49,7 +54,7 @@ class _Operator:
 class _Preconditioner:
     """Applies a preconditioner ``solve(r) -> z`` (PETSc python preconditioner context)."""
 
-    def __init__(self, solve):
+    def __init__(self, solve: Solve):
         self.solve = solve
 
     def apply(self, pc, x, y):
@@ -61,7 +66,16 @@ class _Update:
     derivative D at the points ``changed`` (those that opened or closed, and those whose D moved
     far from D_0): the inverse of P restricted to a (module docstring), for right-hand sides on a."""
 
-    def __init__(self, lu, reference, D_0, active, D, changed, GT):
+    def __init__(
+        self,
+        lu: tuple[npt.NDArray, npt.NDArray],
+        reference: npt.NDArray,
+        D_0: npt.NDArray,
+        active: npt.NDArray,
+        D: npt.NDArray,
+        changed: npt.NDArray,
+        GT: npt.NDArray,
+    ):
         union = np.union1d(reference, active)
         closed = np.setdiff1d(active, reference)
         self.lu, self.n = lu, 3 * len(union)
@@ -140,7 +154,8 @@ class TractionJacobian:
         self._lu = None
         self._lu_points = np.zeros(0, dtype=np.int64)  # a_0 and D_0 of the kept factors
         self._lu_D = np.zeros((0, 3, 3))
-        self._update: tuple[bytes, _Update] | None = None  # the factors updated to an active set
+        # the factors updated to an active set and changed points
+        self._update: tuple[tuple[bytes, bytes], _Update] | None = None
         self.factorizations = 0
         self.updates = 0  #: Woodbury updates of the kept factors to another active set
         self.krylov_iterations = 0
@@ -148,11 +163,14 @@ class TractionJacobian:
 
     def set_compliance(self, G: npt.NDArray) -> None:
         """A new G of the same points, or of more points appended to them (the factors are kept
-        as a preconditioner). G in Fortran order is not copied."""
+        as a preconditioner; nothing is done for the present G). G in Fortran order is not
+        copied."""
+        if G is self.G:
+            return
         self.G = G
         self._GT = np.ascontiguousarray(G.T)
         self._GT32 = self._GT.astype(np.float32)
-        self._GT32[np.abs(self._GT) < 1e-20] = 0.0  # no subnormal numbers in single precision
+        self._GT32[np.abs(self._GT32) < 1e-20] = 0.0  # no subnormal numbers in single precision
         self._block = None
         self._update = None
 
@@ -207,7 +225,7 @@ class TractionJacobian:
         self._update = None
         self.factorizations += 1
 
-    def _factors(self, active: npt.NDArray, D: npt.NDArray):
+    def _factors(self, active: npt.NDArray, D: npt.NDArray) -> Solve | None:
         """The preconditioner's solve from the kept factors for the active set, or None where
         there are none or too many points changed."""
         if self._lu is None:
@@ -222,14 +240,16 @@ class TractionJacobian:
             return lambda r: scipy.linalg.lu_solve(lu, r.astype(np.float32), check_finite=False)
         if len(changed) > self.max_update * len(reference):
             return None
-        key = active.tobytes() + changed.tobytes()
+        key = (active.tobytes(), changed.tobytes())
         if self._update is None or self._update[0] != key:
             update = _Update(lu, reference, self._lu_D, active, D, changed, self._GT32)
             self._update = (key, update)
             self.updates += 1
         return self._update[1].solve
 
-    def _krylov(self, active: npt.NDArray, D: npt.NDArray, r: npt.NDArray, preconditioner):
+    def _krylov(
+        self, active: npt.NDArray, D: npt.NDArray, r: npt.NDArray, preconditioner: Solve
+    ) -> tuple[npt.NDArray, bool]:
         """FGMRES with the preconditioner: the solution and whether it converged."""
         n = len(r)
         comm = PETSc.COMM_SELF

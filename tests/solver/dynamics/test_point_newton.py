@@ -86,7 +86,7 @@ def test_stalled_slip_restarts_stuck():
 def test_reused_factors_against_dense_solve():
     """Each solve against a dense double-precision solve (to the single precision of the solves):
     the first factorises; a turned derivative, more points appended to G and a few points opening
-    and closing reuse the factors (the last by a low-rank update); another active set renews
+    and closing reuse the factors (the last two by low-rank updates); another active set renews
     them."""
     rng = np.random.default_rng(3)
     n = 50
@@ -131,6 +131,10 @@ def test_reused_factors_against_dense_solve():
     D[~kept] = derivative(closed)
     check(changed, D)
     assert jacobian.factorizations == 1 and jacobian.updates == 1
+    # the last points opening one after another: an update for each set
+    for k in (1, 2):
+        check(active[:-k], turned[:-k])
+    assert jacobian.factorizations == 1 and jacobian.updates == 3
     other = np.sort(rng.choice(n, 20, replace=False))
     check(other, derivative(other))
     assert jacobian.factorizations == 2
