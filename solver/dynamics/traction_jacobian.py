@@ -181,11 +181,16 @@ class TractionJacobian:
 
     def times(self, v: npt.NDArray, active: npt.NDArray) -> npt.NDArray:
         """G v (3 np) for v zero off the ``active`` points."""
-        # the whole product: a copy of G's columns of the active points costs more
-        w = np.zeros(len(v))
-        cols = _dofs(active)
-        w[cols] = v[cols]
-        return w @ self._GT
+        out = np.zeros(self._GT.shape[1])
+        if not len(active):
+            return out
+        # run by run of consecutive points, on G^T's rows in place (a copy of them costs more)
+        breaks = np.flatnonzero(np.diff(active) != 1) + 1
+        starts = 3 * active[np.r_[0, breaks]]
+        ends = 3 * (active[np.r_[breaks - 1, len(active) - 1]] + 1)
+        for start, end in zip(starts, ends):
+            out += v[start:end] @ self._GT[start:end]
+        return out
 
     def direction(self, active: npt.NDArray, D: npt.NDArray, phi: npt.NDArray) -> npt.NDArray:
         """The Newton direction dy (3 np) with (I + G D) dy = -phi, D (|a|, 3, 3) the law's
