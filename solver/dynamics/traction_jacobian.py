@@ -230,6 +230,10 @@ class TractionJacobian:
         self._update = None
         self.factorizations += 1
 
+    def _factors_solve(self, r: npt.NDArray) -> npt.NDArray:
+        """J_0^-1 r with the kept factors."""
+        return scipy.linalg.lu_solve(self._lu, r.astype(np.float32), check_finite=False)
+
     def _factors(self, active: npt.NDArray, D: npt.NDArray) -> Solve | None:
         """The preconditioner's solve from the kept factors for the active set, or None where
         there are none or too many points changed."""
@@ -242,7 +246,7 @@ class TractionJacobian:
         moved = np.linalg.norm(D[in_active] - self._lu_D[in_reference], axis=(1, 2)) > self.turn
         changed = np.union1d(np.setxor1d(active, reference, assume_unique=True), kept[moved])
         if not len(changed):
-            return lambda r: scipy.linalg.lu_solve(lu, r.astype(np.float32), check_finite=False)
+            return self._factors_solve
         if len(changed) > self.max_update * len(reference):
             return None
         key = (active.tobytes(), changed.tobytes())
@@ -287,7 +291,7 @@ class TractionJacobian:
             if converged:
                 return dy
         self._factorise(active, D)
-        dy, converged = self._krylov(active, D, r, self._factors(active, D))
+        dy, converged = self._krylov(active, D, r, self._factors_solve)
         if not converged:  # J too ill-conditioned for single-precision factors
             self.direct_solves += 1
             cols = _dofs(active)
