@@ -23,12 +23,12 @@ import numpy as np
 from mpi4py import MPI
 
 from benchmarks.atlas.installed import restore_installed
+from benchmarks.atlas.stepping import advance, joint_state
 from benchmarks.branches import settle
 from solver.dynamics.loads import Schedule, Stage
-from solver.dynamics.time_loop import run
 from solver.installation import checkpoint
 from solver.installation.dismount import pull_out_force
-from solver.installation.model import JointModel, attach_vibration
+from solver.installation.model import attach_vibration
 from solver.installation.planning import compensate
 from solver.installation.settings import StaticForceSettings
 
@@ -36,23 +36,6 @@ __all__ = ["dismount_runs"]
 
 SEPARATION_FRACTION = 0.01  #: normal force below this fraction of the settled one: separated
 CHUNKS = 10  #: a vibration branch stops at the first of these chunks that ends separated
-
-
-def _state(model: JointModel) -> tuple[float, float, float]:
-    """Time [s], settlement [mm] and contact normal force [N] now (collective)."""
-    problem = model.problem
-    return problem.t, model.settlement(problem)["settlement_mm"], model.contact.forces()[0]
-
-
-def _advance(model: JointModel, t_end: float, dt: float, rows: list) -> None:
-    """Integrate to ``t_end`` [s] with step ``dt`` [s], appending ``_state`` after every step."""
-
-    def observe(problem) -> dict:
-        rows.append(_state(model))
-        return {}
-
-    dt_min = dt * model.case.time.dt_min_fraction
-    run(model.problem, t_end, dt, dt_min=dt_min, observers=[observe], progress=False)
 
 
 def dismount_runs(
@@ -95,7 +78,7 @@ def dismount_runs(
         model, chosen, natural_Hz = restore_installed(comm, case_name, overrides, installed)
     case = model.case
     sw, problem = case.self_weight, model.problem
-    t0, s0, n0 = _state(model)
+    t0, s0, n0 = joint_state(model)
     saved = folder / "settled"
     checkpoint.save(saved, problem, {})
     modal = min((e for e in chosen if e.role == "modal"), key=lambda e: e.rank)
@@ -116,8 +99,8 @@ def dismount_runs(
         problem.load.static_axial = StaticForceSettings(times, forces).history(sw)
         checkpoint.restore(saved, problem)
         problem.reset_operator()
-        rows = [_state(model)]
-        _advance(model, t0 + 2 * duration_s, sw.dt_s, rows)
+        rows = [joint_state(model)]
+        advance(model, t0 + 2 * duration_s, sw.dt_s, rows)
         return rows
 
     branches: dict[str, dict[str, Any]] = {}
@@ -136,9 +119,9 @@ def dismount_runs(
                 model, Schedule([Stage(duration_s, e.forcing_Hz, amplitude_N)], start_s=start)
             )
             problem.set_scheme(scheme)
-            branch = [_state(model)]
+            branch = [joint_state(model)]
             for k in range(1, CHUNKS + 1):
-                _advance(
+                advance(
                     model, start + k * duration_s / CHUNKS, 1.0 / (e.forcing_Hz * steps), branch
                 )
                 if separated(branch):

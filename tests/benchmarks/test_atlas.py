@@ -1,9 +1,10 @@
 """The scenario atlas (benchmarks/scenarios.py) on the tiny joint: it runs a list of scenarios,
 makes the runs they share once, and rebuilds its page from every outcome in its output folder;
-S2 reads the stages of an installation run, S5 and S8 also start from its last checkpoint; bad
-requests are refused before anything runs. (The tiny joint's verdicts say nothing about the
+S2 and S4 read the stages of an installation run, S4, S5 and S8 also start from its last
+checkpoint; bad requests are refused before anything runs. (The tiny joint's verdicts say nothing about the
 physics; docs/scenarios.md has the converged joint's.)"""
 
+import csv
 import json
 
 import pytest
@@ -59,10 +60,10 @@ def installed(tiny_case, shared_dir):
     return out
 
 
-def test_s5_s8_from_the_installed_state(installed, atlas_output):
+def test_s2_s4_s5_s8_from_the_installed_state(installed, atlas_output, tiny_case):
     out = atlas_output / "runs_of"  # the settled-state runs of the test above are reused
     page = atlas_output / "page_installed.md"
-    argv = ["S2", "S5", "S8", "--case", "tiny", "--output", str(out), "--docs", str(page)]
+    argv = ["S2", "S4", "S5", "S8", "--case", "tiny", "--output", str(out), "--docs", str(page)]
     assert main([*argv, "--installed", str(installed)]) == 0
     MPI.COMM_WORLD.Barrier()
     manifest = json.loads((installed / "checkpoint" / "manifest.json").read_text())
@@ -80,7 +81,7 @@ def test_s5_s8_from_the_installed_state(installed, atlas_output):
     assert modes["time_s"] == pytest.approx(manifest["time_s"])
     assert len(modes["frequencies_Hz"]) == len(modes["bonded_Hz"]) == 10
     assert f"(t = {manifest['time_s']:.2f} s) against the end of self-weight" in text
-    s2 = text.split("| S2: reference sequence")[1].split("| S5:")[0]
+    s2 = text.split("| S2: reference sequence")[1].split("| S4:")[0]
     vibration = [s for s in manifest["stages"] if s["stage"] >= 1]
     assert len(vibration) == 2  # the tiny case's sequence: one mode and the control
     for s in vibration:  # S2's rows are the run's stages
@@ -88,6 +89,31 @@ def test_s5_s8_from_the_installed_state(installed, atlas_output):
         assert f"gained {1e3 * s['gained_mm']:.1f} um" in s2
     assert "2 of 2 vibration stages" in s2
     assert (atlas_output / "figures" / "scenarios" / "S2_sequence.png").exists()
+    direction = json.loads((out / "runs" / "direction_installed" / "run.json").read_text())
+    s4 = text.split("| S4: which modes work")[1].split("| S5:")[0]
+    stage, modal = next(
+        (s, e)
+        for s in vibration
+        if (e := manifest["excitations"][s["stage"] - 1])["role"] == "modal"
+    )
+    rate = 2 * stage["gained_second_half_mm"] / (stage["end_s"] - stage["start_s"])
+    assert f"rank {modal['rank']}, ({modal['m']}, {modal['n']}), " in s4  # S2's modal stage
+    assert f"{modal['frequency_Hz']:.2f} Hz: {rate:.3f} mm/s" in s4
+    with (installed / "modes.csv").open() as f:  # the lowest m = 1 mode of the modal stage
+        lowest = min(
+            (r for r in csv.DictReader(f) if r["m"] == "1"), key=lambda r: float(r["frequency_Hz"])
+        )
+    mode = direction["mode"]
+    assert mode["mode"] == int(lowest["mode"])
+    assert mode["frequency_Hz"] == pytest.approx(float(lowest["frequency_Hz"]))
+    assert set(direction["branches"]) == {"axial", "both"}
+    stage_s = tiny_case().vibration.stage_duration_s
+    for branch in direction["branches"].values():  # both from the installed state
+        assert branch[0][0] == pytest.approx(manifest["time_s"])
+        assert branch[-1][0] == pytest.approx(manifest["time_s"] + stage_s)
+    gain = {d: b[-1][1] - b[0][1] for d, b in direction["branches"].items()}
+    assert f"{1e3 * gain['both']:.1f} um against {1e3 * gain['axial']:.1f} um" in s4
+    assert (atlas_output / "figures" / "scenarios" / "S4_direction.png").exists()
 
 
 def test_installed_state_of_another_case_is_refused(installed, shared_dir, capsys):
@@ -108,6 +134,7 @@ def test_installed_state_of_another_case_is_refused(installed, shared_dir, capsy
         ([], "no scenario given"),
         (["S3"], "S3 not in the atlas yet"),
         (["S2", "--case", "tiny"], "S2 read(s) an installation run of the case: --installed"),
+        (["S4", "--case", "tiny"], "S4 read(s) an installation run of the case: --installed"),
         (["S1", "--case", "no_such_case"], "error:"),
         (["S5", "--case", "tiny", "--installed", "no_such_run"], "error: no checkpoint in"),
     ],

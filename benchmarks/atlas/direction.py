@@ -1,0 +1,133 @@
+"""The load-direction runs of the atlas (docs/physics.md §5.4): from the installed state (the
+last checkpoint of an installation run of the case), the lowest anti-symmetric mode of the
+run's modal stage driven at the modal stages' amplitude, once axially and once axially plus the
+case's lateral fraction (``vibration.lateral_fraction``, 5 %) laterally, each for one stage
+(``vibration.stage_duration_s``) from the same state.
+
+Anti-symmetric: circumferential wave number m = 1, the modes that bend the joint as a beam and
+that a lateral force excites. The mode is driven at its time-discrete natural frequency
+(``solver.installation.planning.compensate``) with the step of such a stage. Kept as
+``run.json`` in its folder (a later call with the same request, the installed state's time
+included, reads it).
+"""
+
+import csv
+import json
+import time
+from dataclasses import asdict
+from pathlib import Path
+from typing import Any
+
+from mpi4py import MPI
+
+from benchmarks.atlas.installed import restore_installed
+from benchmarks.atlas.stepping import advance, joint_state
+from common.case import read_case
+from solver.dynamics.loads import Schedule, Stage
+from solver.installation import checkpoint
+from solver.installation.case import InstallationCase
+from solver.installation.frequencies import MIN_FREQUENCY_HZ, Excitation
+from solver.installation.model import attach_vibration
+from solver.installation.planning import compensate, stage_step
+
+__all__ = ["DIRECTIONS", "anti_symmetric_mode", "direction_runs"]
+
+DIRECTIONS = ("axial", "both")  #: the two branches: axial, axial plus the lateral fraction
+
+
+def anti_symmetric_mode(run_folder: Path, amplitude_N: float) -> Excitation | None:
+    """The lowest m = 1 mode of at least ``MIN_FREQUENCY_HZ`` among the modes of the modal
+    stage of the installation run in ``run_folder`` (its ``modes.csv``) as a modal excitation at
+    ``amplitude_N`` [N]; None where the run had no modal stage or found no such mode."""
+    path = run_folder / "modes.csv"
+    if not path.exists():
+        return None
+    with path.open() as f:
+        rows = [
+            r
+            for r in csv.DictReader(f)
+            if int(r["m"]) == 1 and float(r["frequency_Hz"]) >= MIN_FREQUENCY_HZ
+        ]
+    if not rows:
+        return None
+    r = min(rows, key=lambda r: float(r["frequency_Hz"]))
+    return Excitation(
+        float(r["frequency_Hz"]),
+        amplitude_N,
+        "modal",
+        int(r["mode"]),
+        1,
+        int(r["n"]),
+        int(r["rank"]),
+        "lowest m = 1 (anti-symmetric) mode of the run's modal stage",
+    )
+
+
+def direction_runs(
+    comm: MPI.Comm,
+    case_name: str,
+    overrides: list[str],
+    folder: Path,
+    installed: Path,
+    amplitude_N: float,
+) -> dict[str, Any]:
+    """From the installed state of ``installed`` (an installation run's output folder), its
+    lowest m = 1 mode (``anti_symmetric_mode``) at ``amplitude_N`` [N] for one stage, in each of
+    ``DIRECTIONS``. Returns (and keeps in ``folder``/run.json) the state's time [s], the mode
+    (None: not run) and per branch its (time [s], settlement [mm], normal force [N]) rows, the
+    lateral fraction and the wall time [s] (collective)."""
+    path = folder / "run.json"
+    request = {
+        "case": case_name,
+        "overrides": overrides,
+        "installed": str(installed),
+        "time_s": checkpoint.read_manifest(installed / "checkpoint", comm)["time_s"],
+        "amplitude_N": amplitude_N,
+    }
+    if path.exists():
+        kept = json.loads(path.read_text())
+        if kept["request"] == request:
+            return kept
+    wall = time.perf_counter()
+    mode = anti_symmetric_mode(installed, amplitude_N)
+    case = InstallationCase.from_dict(read_case(case_name, overrides))
+    vibration = case.vibration
+    branches: dict[str, list] = {}
+    if mode is not None:
+        model, _, _ = restore_installed(comm, case_name, overrides, installed)
+        problem = model.problem
+        saved = folder / "installed"
+        checkpoint.save(saved, problem, {})
+        scheme, steps = case.vibration_scheme(), case.time.steps_per_period
+        duration = vibration.stage_duration_s
+        mode = compensate([mode], [duration], scheme, steps)[0]
+        dt = stage_step(duration, mode.drive_Hz, steps)  # the step compensate drives it at
+        for direction in DIRECTIONS:
+            checkpoint.restore(saved, problem)
+            problem.reset_operator()
+            start = problem.t
+            stage = Stage(
+                duration,
+                mode.drive_Hz,
+                amplitude_N,
+                direction=direction,
+                lateral_fraction=vibration.lateral_fraction,
+                lateral_angle_deg=vibration.angle_deg,
+            )
+            attach_vibration(model, Schedule([stage], start_s=start))
+            problem.set_scheme(scheme)
+            rows = [joint_state(model)]
+            advance(model, start + duration, dt, rows)
+            branches[direction] = rows
+    result = {
+        "request": request,
+        "name": folder.name,
+        "mode": None if mode is None else asdict(mode),
+        "lateral_fraction": vibration.lateral_fraction,
+        "branches": branches,
+        "wall_s": time.perf_counter() - wall,
+    }
+    if comm.rank == 0:
+        folder.mkdir(parents=True, exist_ok=True)
+        path.write_text(json.dumps(result))
+    return result
