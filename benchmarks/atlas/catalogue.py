@@ -292,10 +292,26 @@ def s4_modes(ctx: Context) -> Outcome:
                 verdict(gain["both"] > gain["axial"]),
             )
         )
+        reversed_ratio = (
+            f" ({gain['both reversed'] / gain['axial']:.2f} x)" if gain["axial"] > 0 else ""
+        )
+        rows.append(
+            Row(
+                "probe: the same with the lateral part reversed (the modal force of a lateral "
+                "part adds to the axial part's or opposes it, by the orientation of the mode)",
+                f"{1e3 * gain['both reversed']:.1f} um against {1e3 * gain['axial']:.1f} um"
+                f"{reversed_ratio}",
+                "measured",
+            )
+        )
         path, name = ctx.figure("S4", "direction.png")
         if ctx.comm.rank == 0:
             figures.plot_branches(
-                {"axial": r["branches"]["axial"], lateral: r["branches"]["both"]},
+                {
+                    "axial": r["branches"]["axial"],
+                    lateral: r["branches"]["both"],
+                    f"{lateral}, reversed": r["branches"]["both reversed"],
+                },
                 path,
                 f"S4: the ({e.m}, {e.n}) mode at {e.frequency_Hz:.1f} Hz from the installed state",
             )

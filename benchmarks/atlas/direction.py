@@ -30,9 +30,12 @@ from solver.installation.frequencies import MIN_FREQUENCY_HZ, Excitation
 from solver.installation.model import attach_vibration
 from solver.installation.planning import compensate, stage_step
 
-__all__ = ["DIRECTIONS", "anti_symmetric_mode", "direction_runs"]
+__all__ = ["BRANCHES", "anti_symmetric_mode", "direction_runs"]
 
-DIRECTIONS = ("axial", "both")  #: the two branches: axial, axial plus the lateral fraction
+#: the branches: (direction, lateral angle from the case's ``vibration.angle_deg`` [deg]):
+#: axial; axial plus the lateral fraction; the same with the lateral part reversed (a probe: the
+#: lateral part's modal force adds to the axial part's or opposes it, by the mode's orientation)
+BRANCHES = {"axial": ("axial", 0.0), "both": ("both", 0.0), "both reversed": ("both", 180.0)}
 
 
 def anti_symmetric_mode(run_folder: Path, amplitude_N: float) -> Excitation | None:
@@ -73,9 +76,10 @@ def direction_runs(
 ) -> dict[str, Any]:
     """From the installed state of ``installed`` (an installation run's output folder), its
     lowest m = 1 mode (``anti_symmetric_mode``) at ``amplitude_N`` [N] for one stage, in each of
-    ``DIRECTIONS``. Returns (and keeps in ``folder``/run.json) the state's time [s], the mode
+    the ``BRANCHES``. Returns (and keeps in ``folder``/run.json) the state's time [s], the mode
     (None: not run) and per branch its (time [s], settlement [mm], normal force [N]) rows, the
-    lateral fraction and the wall time [s] (collective)."""
+    lateral fraction and the wall time [s] (collective). A kept run of the same request is
+    returned with only the branches it lacks run."""
     path = folder / "run.json"
     request = {
         "case": case_name,
@@ -84,15 +88,18 @@ def direction_runs(
         "time_s": checkpoint.read_manifest(installed / "checkpoint", comm)["time_s"],
         "amplitude_N": amplitude_N,
     }
+    branches: dict[str, list] = {}
+    wall_kept = 0.0
     if path.exists():
         kept = json.loads(path.read_text())
         if kept["request"] == request:
-            return kept
+            if kept["mode"] is None or set(kept["branches"]) == set(BRANCHES):
+                return kept
+            branches, wall_kept = kept["branches"], kept["wall_s"]
     wall = time.perf_counter()
     mode = anti_symmetric_mode(installed, amplitude_N)
     case = InstallationCase.from_dict(read_case(case_name, overrides))
     vibration = case.vibration
-    branches: dict[str, list] = {}
     if mode is not None:
         model, _, _ = restore_installed(comm, case_name, overrides, installed)
         problem = model.problem
@@ -102,7 +109,9 @@ def direction_runs(
         duration = vibration.stage_duration_s
         mode = compensate([mode], [duration], scheme, steps)[0]
         dt = stage_step(duration, mode.drive_Hz, steps)  # the step compensate drives it at
-        for direction in DIRECTIONS:
+        for name, (direction, turn_deg) in BRANCHES.items():
+            if name in branches:
+                continue
             checkpoint.restore(saved, problem)
             problem.reset_operator()
             start = problem.t
@@ -112,20 +121,20 @@ def direction_runs(
                 amplitude_N,
                 direction=direction,
                 lateral_fraction=vibration.lateral_fraction,
-                lateral_angle_deg=vibration.angle_deg,
+                lateral_angle_deg=vibration.angle_deg + turn_deg,
             )
             attach_vibration(model, Schedule([stage], start_s=start))
             problem.set_scheme(scheme)
             rows = [joint_state(model)]
             advance(model, start + duration, dt, rows)
-            branches[direction] = rows
+            branches[name] = rows
     result = {
         "request": request,
         "name": folder.name,
         "mode": None if mode is None else asdict(mode),
         "lateral_fraction": vibration.lateral_fraction,
         "branches": branches,
-        "wall_s": time.perf_counter() - wall,
+        "wall_s": wall_kept + time.perf_counter() - wall,
     }
     if comm.rank == 0:
         folder.mkdir(parents=True, exist_ok=True)

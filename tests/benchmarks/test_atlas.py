@@ -106,13 +106,14 @@ def test_s2_s4_s5_s8_from_the_installed_state(installed, atlas_output, tiny_case
     mode = direction["mode"]
     assert mode["mode"] == int(lowest["mode"])
     assert mode["frequency_Hz"] == pytest.approx(float(lowest["frequency_Hz"]))
-    assert set(direction["branches"]) == {"axial", "both"}
+    assert set(direction["branches"]) == {"axial", "both", "both reversed"}
     stage_s = tiny_case().vibration.stage_duration_s
     for branch in direction["branches"].values():  # both from the installed state
         assert branch[0][0] == pytest.approx(manifest["time_s"])
         assert branch[-1][0] == pytest.approx(manifest["time_s"] + stage_s)
     gain = {d: b[-1][1] - b[0][1] for d, b in direction["branches"].items()}
     assert f"{1e3 * gain['both']:.1f} um against {1e3 * gain['axial']:.1f} um" in s4
+    assert f"{1e3 * gain['both reversed']:.1f} um against {1e3 * gain['axial']:.1f} um" in s4
     assert (atlas_output / "figures" / "scenarios" / "S4_direction.png").exists()
 
 
