@@ -190,6 +190,8 @@ class PointNewtonSolver:
         traction_rtol, traction_iterations: tolerance and iteration limit of the inner problem.
         pairing_rtol: G is recomputed when the candidates' master parts moved by more than this
             fraction since it was (or a candidate paired with another master facet).
+        slow_contraction: G is also recomputed at the present pairing when the last outer
+            iteration, with a kept G, reduced ||R|| by less than this factor.
         look_ahead: when candidates are added, the facets within this multiple of
             ``candidate_gap`` are added as well.
     """
@@ -207,6 +209,7 @@ class PointNewtonSolver:
         traction_rtol: float = 1e-12,
         traction_iterations: int = 60,
         pairing_rtol: float = 1e-2,
+        slow_contraction: float = 0.03,
         look_ahead: float = 4.0,
     ):
         if max_iterations < 1:
@@ -234,7 +237,7 @@ class PointNewtonSolver:
         #: the inner problem's linear solves; its factors are kept while the points are the same
         self.jacobian = TractionJacobian()
         self._last_y: npt.NDArray | None = None  # the last inner solution, while its points stay
-        self.pairing_rtol = pairing_rtol
+        self.pairing_rtol, self.slow_contraction = pairing_rtol, slow_contraction
         self._candidates = np.zeros(0, dtype=np.int64)  # this rank's candidate points
         self.factorizations = 0  #: LU factorisations of A'
         self.builds = 0  #: extensions of the compliance blocks
@@ -380,18 +383,19 @@ class PointNewtonSolver:
             (master_dofs, master),
         )
 
-    def _compliance_matrix(self, M_b, weight, master) -> npt.NDArray:
-        """G at the present pairing: the last one while no candidate changed its master facet and
-        the master parts moved by at most ``pairing_rtol`` of their size (G is the Jacobian of
-        the inner problem; the residuals use the present pairing)."""
+    def _compliance_matrix(self, M_b, weight, master, keep: bool) -> tuple[npt.NDArray, bool]:
+        """G at the present pairing and whether it was built now: where ``keep``, the last one
+        while no candidate changed its master facet and the master parts moved by at most
+        ``pairing_rtol`` of their size (G is the Jacobian of the inner problem; the residuals
+        use the present pairing)."""
         kept = self._G_master
-        if self._G is not None and kept is not None and np.array_equal(kept[0], master[0]):
+        if keep and self._G is not None and kept is not None and np.array_equal(kept[0], master[0]):
             change = np.abs(master[1] - kept[1]).max(initial=0.0)
             if change <= self.pairing_rtol * np.abs(kept[1]).max(initial=0.0):
-                return self._G
+                return self._G, False
         G = self.compliance.matrix(M_b, weight)
         self._G, self._G_master = G, master
-        return G
+        return G, True
 
     def solve(
         self,
@@ -427,6 +431,7 @@ class PointNewtonSolver:
         inner: list[int] = []
         result: NewtonResult | None = None
         factorizations0 = self.factorizations
+        built = False
         for k in range(self.max_iterations + 1):
             norms.append(norm)
             if not np.isfinite(norm):
@@ -449,7 +454,9 @@ class PointNewtonSolver:
             t0 = time.perf_counter()
             self._update_points(contact)
             y_k, normal, mu, weight, M_b, master = self._gather_points(contact)
-            G = self._compliance_matrix(M_b, weight, master)
+            # a kept G that slowed the last iteration down is rebuilt at the present pairing
+            slow = k > 0 and not built and norm > self.slow_contraction * norms[-2]
+            G, built = self._compliance_matrix(M_b, weight, master, keep=not slow)
             r_zone.array[:] = F.array_r[self._zone_local]
             compliance.solve(r_zone, d_zone)
             timings["compliance"] += time.perf_counter() - t0
