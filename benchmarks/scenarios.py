@@ -4,7 +4,7 @@ docs/scenarios.md (``benchmarks/atlas``).
     mpirun -n 2 python benchmarks/scenarios.py --all                # every scenario in the atlas
     mpirun -n 2 python benchmarks/scenarios.py S1 S8                # a list
     mpirun -n 2 python benchmarks/scenarios.py S1 --case tiny --docs /tmp/atlas.md
-    mpirun -n 2 python benchmarks/scenarios.py S2 S4 S5 S8 --installed output/install  # + installed state
+    mpirun -n 2 python benchmarks/scenarios.py S2 S3 S4 S5 S8 --installed output/install  # + installed state
 
 The joint is ``--case`` (default ``scaled``: the converged joint, 48 around, P2) with
 ``--set`` overrides. Each scenario prints its wall time; the page is rebuilt from every outcome
@@ -39,8 +39,9 @@ def main(argv=None) -> int:
         type=Path,
         metavar="RUN",
         help="output folder of a demos/install.py run of the case on as many ranks: S2 and S4 "
-        "read its stages, S4 also drives an anti-symmetric mode from its last checkpoint, S5 "
-        "also dismounts from it, S8 also has the frequencies there",
+        "read its stages, S3 varies the amplitude at its non-modal frequencies from its last "
+        "checkpoint, S4 also drives an anti-symmetric mode from it, S5 also dismounts from it, "
+        "S8 also has the frequencies there",
     )
     a = p.parse_args(argv)
     comm = MPI.COMM_WORLD

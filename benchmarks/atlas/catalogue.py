@@ -13,6 +13,13 @@ import numpy as np
 from mpi4py import MPI
 
 from benchmarks.atlas import figures
+from benchmarks.atlas.amplitude import (
+    BRACKET,
+    BRANCH_PERIODS,
+    FACTOR_RANGE,
+    amplitude_runs,
+    settles,
+)
 from benchmarks.atlas.direction import direction_runs
 from benchmarks.atlas.dismount import dismount_runs
 from benchmarks.atlas.installed import installed_modes, installed_state
@@ -41,7 +48,7 @@ class Context:
     overrides: list[str]
     output: Path
     #: output folder of an installation run of the case (``demos/install.py``): S2 and S4
-    #: read its stages, S4 and S5 also run from its last checkpoint, S8 also has the
+    #: read its stages, S3, S4 and S5 also run from its last checkpoint, S8 also has the
     #: frequencies there
     installed: Path | None = None
 
@@ -205,6 +212,79 @@ def s2_sequence(ctx: Context) -> Outcome:
     wall = sum(s["wall_s"] for s in manifest["stages"])
     runs = {"installation": {"name": f"installation run {ctx.installed.name}", "wall_s": wall}}
     return _outcome(ctx, "S2", rows, runs, names)
+
+
+def s3_amplitude(ctx: Context) -> Outcome:
+    """S3 from the installed state of the installation run ``ctx.installed``: at its control
+    and its highest lead-in frequency, the amplitude above which a branch of a few periods
+    settles in a stick-slip event, bracketed to ``BRACKET`` (``benchmarks.atlas.amplitude``)."""
+    if ctx.installed is None:
+        raise ValueError("S3 starts from an installation run: --installed RUN")
+    case = ctx.case()
+    amplitude = case.vibration.amplitude_N
+    steps, slip_rate = case.time.steps_per_period, case.output.slip_rate_mm_s
+    r = amplitude_runs(
+        ctx.comm,
+        ctx.case_name,
+        ctx.overrides,
+        ctx.output / "runs" / "amplitude_installed",
+        ctx.installed,
+    )
+    rows, names = [], []
+    for f, runs in r["frequencies"].items():
+        results = {float(k): settles(b, steps, slip_rate) for k, b in runs.items()}
+        gain = {float(k): b[-1][1] - b[0][1] for k, b in runs.items()}
+        holding = [k for k, s in results.items() if not s]
+        settling = [k for k, s in results.items() if s]
+        criterion = (
+            f"from the installed state (t = {r['request']['time_s']:.2f} s), at {float(f):.2f} Hz "
+            f"(not at a natural frequency), branches of {BRANCH_PERIODS} periods at k x "
+            f"{amplitude / 1e3:g} kN: the amplitude above which the joint settles (a stick-slip "
+            f"event, period-averaged rate above {slip_rate:g} mm/s) bracketed to "
+            f"{100 * (BRACKET - 1):.0f} %; below it none (§5.3)"
+        )
+        tried = "; ".join(
+            f"{k * amplitude / 1e3:.3g} kN: {1e3 * gain[k]:+.1f} um"
+            + (" (event)" if results[k] else "")
+            for k in sorted(results)
+        )
+        failure = r.get("failed", {}).get(f)
+        if failure is not None:
+            measured = (
+                f"not bracketed: the branch at {failure['factor'] * amplitude / 1e3:.3g} kN "
+                f"failed ({failure['message'].split(':')[0]}); {tried}"
+            )
+            holds = False
+        elif holding and settling and min(settling) / max(holding) <= BRACKET:
+            low, high = max(holding), min(settling)
+            measured = (
+                f"threshold between {low * amplitude / 1e3:.3g} and {high * amplitude / 1e3:.3g} "
+                f"kN ({low:.3g} to {high:.3g} A); {tried}"
+            )
+            holds = all(not results[k] for k in results if k < high)
+        else:
+            limit = FACTOR_RANGE[1] if not settling else FACTOR_RANGE[0]
+            measured = (
+                f"not bracketed: {'no event up to' if not settling else 'an event down to'} "
+                f"{limit * amplitude / 1e3:.3g} kN; {tried}"
+            )
+            holds = False
+        rows.append(Row(criterion, measured, verdict(holds)))
+        path, name = ctx.figure("S3", f"amplitude_{float(f):.0f}Hz.png")
+        if ctx.comm.rank == 0:
+            figures.plot_branches(
+                {f"{k * amplitude / 1e3:.3g} kN": runs[f"{k:.6g}"] for k in sorted(results)},
+                path,
+                f"S3: {float(f):.2f} Hz from the installed state",
+            )
+        names.append(name)
+    if not r["frequencies"]:
+        rows.append(
+            Row(
+                "amplitude threshold at non-modal frequencies", "the run has none", "not reproduced"
+            )
+        )
+    return _outcome(ctx, "S3", rows, {"amplitude": r}, names)
 
 
 def s4_modes(ctx: Context) -> Outcome:
@@ -606,7 +686,8 @@ SCENARIOS: dict[str, Scenario] = {
         "amplitude-driven settlement at two non-modal frequencies",
         "the amplitude threshold bracketed to 10 %; above it settlement off resonance, below "
         "it none",
-        needs=_VIBRATION,
+        s3_amplitude,
+        installed=True,
     ),
     "S4": Scenario(
         "which modes work",

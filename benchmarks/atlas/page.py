@@ -21,7 +21,7 @@ which runs the scenarios, keeps each one's outputs in `output/atlas/<scenario>/`
 scenarios share, in `output/atlas/runs/`, are made once) and rebuilds this page from all the
 scenarios found there. With `--installed RUN` (the output folder of a `demos/install.py` run
 of the same case on as many ranks), S2 and S4 read that run's stages (those up to its last
-checkpoint: all of them once it has finished), and S4, S5 and S8 also start from the installed
+checkpoint: all of them once it has finished), and S3, S4, S5 and S8 also start from the installed
 state: the run's last checkpoint, after its last completed stage. The installation run's own time (the sum of its
 stages' wall times) counts in S2 only (docs/install.md, "Cost"). A verdict is "reproduced"
 or "not reproduced" where the criterion is a test, "measured" where it is a figure to report.

@@ -1,6 +1,6 @@
 """The scenario atlas (benchmarks/scenarios.py) on the tiny joint: it runs a list of scenarios,
 makes the runs they share once, and rebuilds its page from every outcome in its output folder;
-S2 and S4 read the stages of an installation run, S4, S5 and S8 also start from its last
+S2 and S4 read the stages of an installation run, S3, S4, S5 and S8 also start from its last
 checkpoint; bad requests are refused before anything runs. (The tiny joint's verdicts say nothing about the
 physics; docs/scenarios.md has the converged joint's.)"""
 
@@ -115,6 +115,30 @@ def test_s2_s4_s5_s8_from_the_installed_state(installed, atlas_output, tiny_case
     assert f"{1e3 * gain['both']:.1f} um against {1e3 * gain['axial']:.1f} um" in s4
     assert f"{1e3 * gain['both reversed']:.1f} um against {1e3 * gain['axial']:.1f} um" in s4
     assert (atlas_output / "figures" / "scenarios" / "S4_direction.png").exists()
+
+
+@pytest.mark.slow  # about 5 min on 2 ranks: the tiny joint slides at every amplitude (4 branches)
+def test_s3_from_the_installed_state(installed, atlas_output):
+    out = atlas_output / "runs_of"
+    page = atlas_output / "page_s3.md"
+    argv = ["S3", "--case", "tiny", "--output", str(out), "--docs", str(page)]
+    assert main([*argv, "--installed", str(installed)]) == 0
+    MPI.COMM_WORLD.Barrier()
+    manifest = json.loads((installed / "checkpoint" / "manifest.json").read_text())
+    text = page.read_text()
+    amplitude = json.loads((out / "runs" / "amplitude_installed" / "run.json").read_text())
+    control = next(e for e in manifest["excitations"] if e["role"] == "control")
+    drive = control["forcing_Hz"] or control["frequency_Hz"]
+    assert list(amplitude["frequencies"]) == [f"{drive:.6g}"]  # the tiny run has no lead-in
+    branches = amplitude["frequencies"][f"{drive:.6g}"]
+    assert "1" in branches  # the search starts at the modal amplitude
+    for rows in branches.values():  # each from the installed state, 5 periods
+        assert rows[0][0] == pytest.approx(manifest["time_s"])
+        assert rows[-1][0] == pytest.approx(manifest["time_s"] + 5 / drive)
+    s3 = text.split("| S3: amplitude-driven settlement")[1].split("| S4:")[0]
+    assert f"at {drive:.2f} Hz (not at a natural frequency)" in s3
+    assert "threshold between" in s3 or "not bracketed" in s3
+    assert (atlas_output / "figures" / "scenarios" / f"S3_amplitude_{drive:.0f}Hz.png").exists()
 
 
 def test_installed_state_of_another_case_is_refused(installed, shared_dir, capsys):
