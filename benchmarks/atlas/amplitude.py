@@ -2,10 +2,12 @@
 checkpoint of an installation run of the case), at each of two non-modal frequencies of the run
 (its control and its highest lead-in), branches of ``BRANCH_PERIODS`` excitation periods at
 amplitudes k A (A: the modal stages' amplitude, ``vibration.amplitude_N``), each from the same
-state. A branch settles when it holds a stick-slip event as the installation run counts them
-(``solver.post.report``: the settlement rate averaged over one period above
-``output.slip_rate_mm_s``). The factor k is doubled (or halved) from 1 until the answer changes,
-then bisected geometrically until the threshold is bracketed to ``BRACKET``.
+state, and a baseline branch without excitation (k = 0): the installed state still settles for
+a few periods after the last stage. A branch settles when the settlement it adds to the
+baseline holds a stick-slip event as the installation run counts them (``solver.post.report``:
+the rate averaged over one period above ``output.slip_rate_mm_s``). The factor k is doubled (or
+halved) from 1 until the answer changes, then bisected geometrically until the threshold is
+bracketed to ``BRACKET``.
 
 The branches of one frequency share the step, so they share the operator and the contact
 solver's factors and compliance blocks (the state they start from is the same). Kept as
@@ -33,10 +35,17 @@ from solver.installation.model import JointModel, attach_vibration
 from solver.installation.planning import stage_step
 from solver.post import report
 
-__all__ = ["BRACKET", "BRANCH_PERIODS", "amplitude_runs", "non_modal_frequencies", "settles"]
+__all__ = [
+    "BRACKET",
+    "BRANCH_PERIODS",
+    "added_settlement",
+    "amplitude_runs",
+    "non_modal_frequencies",
+    "settles",
+]
 
 BRANCH_PERIODS = 5  #: excitation periods per branch
-BRACKET = 1.1  #: the threshold's bracket: largest factor that settles / smallest that does not
+BRACKET = 1.1  #: the threshold's bracket: smallest factor that settles / largest that does not
 FACTOR_RANGE = (1 / 8, 8.0)  #: factors k tried, at most
 
 
@@ -47,10 +56,19 @@ def non_modal_frequencies(excitations: list[Excitation]) -> list[float]:
     return control[:1] + ([max(lead_in)] if lead_in else [])
 
 
-def settles(rows: list, steps_per_period: int, slip_rate_mm_s: float) -> bool:
-    """Whether a branch's (time [s], settlement [mm], normal force [N]) rows, the first at its
-    start, hold a stick-slip event."""
+def added_settlement(rows: list, baseline: list) -> tuple[np.ndarray, np.ndarray]:
+    """Time [s] and the settlement [mm] a branch adds to the baseline branch from its start, of
+    their (time [s], settlement [mm], normal force [N]) rows (the baseline interpolated to the
+    branch's times)."""
     t, s, _ = np.array(rows).T
+    t_0, s_0, _ = np.array(baseline).T
+    return t, (s - s[0]) - (np.interp(t, t_0, s_0) - s_0[0])
+
+
+def settles(rows: list, baseline: list, steps_per_period: int, slip_rate_mm_s: float) -> bool:
+    """Whether the settlement a branch adds to the baseline (``added_settlement``) holds a
+    stick-slip event."""
+    t, s = added_settlement(rows, baseline)
     return bool(report.slip_episodes(t[1:], s[1:], s[0], t[0], steps_per_period, slip_rate_mm_s))
 
 
@@ -127,7 +145,7 @@ def amplitude_runs(
     of its ``non_modal_frequencies``, the branches that bracket the amplitude threshold. Returns
     (and keeps in ``folder``/run.json, rewritten after each branch) the request (with the
     state's time [s] and the amplitude A [N]), per frequency (as text, [Hz]) the (time [s],
-    settlement [mm], normal force [N]) rows of each factor k (as text), the branch that failed
+    settlement [mm], normal force [N]) rows of each factor k (as text; "0": the baseline), the branch that failed
     (its factor and the error) of each frequency where one did (its search stops there) and the
     wall time [s] (collective)."""
     path = folder / "run.json"
@@ -148,25 +166,30 @@ def amplitude_runs(
         kept = json.loads(path.read_text())
         if kept["request"] == request:
             result["frequencies"], wall_kept = kept["frequencies"], kept["wall_s"]
+            result["failed"] = kept.get("failed", {})
     wall = time.perf_counter()
     excitations = [Excitation(**e) for e in manifest["excitations"]]
     steps, slip_rate = case.time.steps_per_period, case.output.slip_rate_mm_s
     failed = result.setdefault("failed", {})
     for f in non_modal_frequencies(excitations):
         runs = result["frequencies"].setdefault(f"{f:.6g}", {})
-        results = {float(k): settles(rows, steps, slip_rate) for k, rows in runs.items()}
-        while f"{f:.6g}" not in failed and (k := _next_factor(results)) is not None:
+        results: dict[float, bool] = {}
+        k: float | None = 0.0  # the baseline first
+        while f"{f:.6g}" not in failed and k is not None:
             k = float(f"{k:.6g}")  # as kept in run.json
-            try:
-                runs[f"{k:.6g}"] = branches.run(folder, f, k)
-            except RuntimeError as e:  # Newton failed at the minimum step: the search stops here
-                failed[f"{f:.6g}"] = {"factor": k, "message": str(e)}
-                continue
-            results[k] = settles(runs[f"{k:.6g}"], steps, slip_rate)
-            result["wall_s"] = wall_kept + time.perf_counter() - wall
-            if comm.rank == 0:
-                folder.mkdir(parents=True, exist_ok=True)
-                path.write_text(json.dumps(result))
+            if f"{k:.6g}" not in runs:
+                try:
+                    runs[f"{k:.6g}"] = branches.run(folder, f, k)
+                except RuntimeError as e:  # Newton failed at the minimum step: the search stops
+                    failed[f"{f:.6g}"] = {"factor": k, "message": str(e)}
+                    break
+                result["wall_s"] = wall_kept + time.perf_counter() - wall
+                if comm.rank == 0:
+                    folder.mkdir(parents=True, exist_ok=True)
+                    path.write_text(json.dumps(result))
+            if k > 0:
+                results[k] = settles(runs[f"{k:.6g}"], runs["0"], steps, slip_rate)
+            k = _next_factor(results)
     result["wall_s"] = wall_kept + time.perf_counter() - wall
     if comm.rank == 0:
         folder.mkdir(parents=True, exist_ok=True)

@@ -57,9 +57,12 @@ def plot_frequencies(series: dict[str, list[float]], path: Path, title: str) -> 
     plt.close(fig)
 
 
-def plot_branches(branches: dict[str, list], path: Path, title: str) -> None:
-    """Settlement [mm] and contact normal force [kN] against time [s] of branches from one
-    state: rows (time [s], settlement [mm], normal force [N]) by label."""
+def plot_branches(
+    branches: dict[str, list], path: Path, title: str, ylabel: str = "settlement [mm]"
+) -> None:
+    """Settlement (``ylabel``: its quantity and unit, by default [mm]) and contact normal force
+    [kN] against time [s] of branches from one state: rows (time [s], settlement, normal force
+    [N]) by label."""
     plt = _pyplot()
     fig, (ax, ax2) = plt.subplots(2, 1, figsize=(8, 5.5), sharex=True)
     for label, rows in branches.items():
@@ -67,7 +70,7 @@ def plot_branches(branches: dict[str, list], path: Path, title: str) -> None:
         ax.plot(t, s, lw=1.2, label=label)
         ax2.plot(t, 1e-3 * n, lw=1.2)
     ax.axhline(0.0, color="k", lw=0.6, ls=":")
-    ax.set_ylabel("settlement [mm]")
+    ax.set_ylabel(ylabel)
     ax.set_title(title)
     ax.legend(loc="lower left", fontsize=8)
     ax2.set_xlabel("time [s]")
