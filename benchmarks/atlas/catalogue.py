@@ -217,8 +217,9 @@ def s2_sequence(ctx: Context) -> Outcome:
 
 def s3_amplitude(ctx: Context) -> Outcome:
     """S3 from the installed state of the installation run ``ctx.installed``: at its control
-    and its highest lead-in frequency, the amplitude above which a branch of a few periods
-    settles in a stick-slip event, bracketed to ``BRACKET`` (``benchmarks.atlas.amplitude``)."""
+    and its highest lead-in frequency, the amplitude above which the settlement a branch of a
+    few periods adds to the unexcited state's holds a stick-slip event, bracketed to ``BRACKET``
+    (``benchmarks.atlas.amplitude``), and how the added settlement grows with the amplitude."""
     if ctx.installed is None:
         raise ValueError("S3 starts from an installation run: --installed RUN")
     case = ctx.case()
