@@ -46,34 +46,26 @@ def main(argv=None) -> int:
     a = p.parse_args(argv)
     comm = MPI.COMM_WORLD
     keys = (
-        [
-            k
-            for k, s in SCENARIOS.items()
-            if s.run is not None and (a.installed is not None or not s.installed)
-        ]
+        [k for k, s in SCENARIOS.items() if a.installed is not None or not s.installed]
         if a.all
         else a.scenarios
     )
     unknown = [k for k in keys if k not in SCENARIOS]
-    pending = [k for k in keys if k in SCENARIOS and SCENARIOS[k].run is None]
     uninstalled = [
         k for k in keys if a.installed is None and k in SCENARIOS and SCENARIOS[k].installed
     ]
-    if not keys or unknown or pending or uninstalled:
+    if not keys or unknown or uninstalled:
         message = (
             f"unknown scenario(s) {', '.join(unknown)}; "
             if unknown
             else "no scenario given (a list, or --all); "
             if not keys
-            else f"{', '.join(pending)} not in the atlas yet (needs "
-            f"{SCENARIOS[pending[0]].needs}); "
-            if pending
             else f"{', '.join(uninstalled)} read(s) an installation run of the case: "
             "--installed RUN; "
         )
         if comm.rank == 0:
             print(
-                message + f"the atlas runs {', '.join(k for k, s in SCENARIOS.items() if s.run)}",
+                message + f"the atlas runs {', '.join(SCENARIOS)}",
                 file=sys.stderr,
             )
         return 2

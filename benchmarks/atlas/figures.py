@@ -5,7 +5,7 @@ from pathlib import Path
 
 import numpy as np
 
-__all__ = ["plot_branches", "plot_frequencies", "plot_sequence", "plot_settlement"]
+__all__ = ["plot_branches", "plot_frequencies", "plot_ramps", "plot_sequence", "plot_settlement"]
 
 
 def _pyplot():
@@ -86,6 +86,7 @@ ROLE_COLOURS = {
     "lead-in": "tab:orange",
     "modal": "tab:green",
     "control": "tab:red",
+    "sweep step": "tab:purple",
 }
 
 
@@ -129,13 +130,39 @@ def plot_sequence(
             fontsize=8,
         )
     top = max([s["frequency_Hz"] for s, _ in vibration], default=100.0) * 1.1
-    for k, fn in enumerate(f for f in natural_hz if f <= top):
+    marked = [f for f in natural_hz if f <= top]
+    for k, fn in enumerate(marked):
         label = "natural frequency (settled)" if k == 0 else None
         ax_f.axvline(fn, color="tab:blue", ls=":", lw=0.8, label=label)
     ax_f.set_yscale("log")
     ax_f.set_xlabel("excitation frequency [Hz]")
     ax_f.set_ylabel("settlement gained in the stage [um]")
-    ax_f.legend(loc="upper right", fontsize=8)
+    if marked:
+        ax_f.legend(loc="upper right", fontsize=8)
+    fig.tight_layout()
+    fig.savefig(path, dpi=120)
+    plt.close(fig)
+
+
+def plot_ramps(
+    ramps: dict[str, tuple[np.ndarray, np.ndarray]], natural_hz: list[float], path: Path, title: str
+) -> None:
+    """Settlement gained [um] against the excitation frequency [Hz] of linear frequency ramps
+    (frequency and gain arrays by label), the natural frequencies in the ramps' range marked."""
+    plt = _pyplot()
+    fig, ax = plt.subplots(figsize=(8, 4))
+    for label, (f, gained) in ramps.items():
+        ax.plot(f, gained, lw=1.2, label=label)
+    low = min(f.min() for f, _ in ramps.values())
+    high = max(f.max() for f, _ in ramps.values())
+    for k, fn in enumerate(f for f in natural_hz if low <= f <= high):
+        ax.axvline(
+            fn, color="tab:blue", ls=":", lw=0.8, label="natural frequency" if k == 0 else None
+        )
+    ax.set_xlabel("excitation frequency [Hz]")
+    ax.set_ylabel("settlement gained in the ramp [um]")
+    ax.set_title(title)
+    ax.legend(loc="upper left", fontsize=8)
     fig.tight_layout()
     fig.savefig(path, dpi=120)
     plt.close(fig)

@@ -1,5 +1,6 @@
 """What a scenario of the atlas measured: one row per criterion, its wall time and figures,
-kept as JSON beside the run's outputs so that the page can be rebuilt from any subset."""
+kept as JSON beside the run's outputs and beside the page, so that the page can be rebuilt
+after any subset of the scenarios has run."""
 
 import json
 from dataclasses import asdict, dataclass, field
@@ -43,13 +44,14 @@ class Outcome:
         """Wall time [s] of the runs the scenario needs."""
         return sum(self.runs.values())
 
-    def save(self, folder: Path) -> None:
-        folder.mkdir(parents=True, exist_ok=True)
-        (folder / "outcome.json").write_text(json.dumps(asdict(self), indent=1))
+    def save(self, path: Path) -> None:
+        """Write the outcome to the JSON file ``path``."""
+        path.parent.mkdir(parents=True, exist_ok=True)
+        path.write_text(json.dumps(asdict(self), indent=1))
 
     @classmethod
-    def load(cls, folder: Path) -> "Outcome | None":
-        path = folder / "outcome.json"
+    def load(cls, path: Path) -> "Outcome | None":
+        """The outcome in the JSON file ``path`` (None where there is none)."""
         if not path.exists():
             return None
         data = json.loads(path.read_text())

@@ -1,5 +1,7 @@
 """``docs/scenarios.md``: the atlas page, rebuilt from the outcomes found in the output folder
-(every scenario run so far with the same output folder), with their figures copied beside it."""
+(every scenario run so far with the same output folder) and, for the other scenarios, from the
+outcomes kept beside the page (``docs/scenarios/<key>.json``, the last of each scenario written
+to the page), with their figures copied beside it."""
 
 import shutil
 from pathlib import Path
@@ -19,7 +21,8 @@ written by
 
 which runs the scenarios, keeps each one's outputs in `output/atlas/<scenario>/` (runs that
 scenarios share, in `output/atlas/runs/`, are made once) and rebuilds this page from all the
-scenarios found there. With `--installed RUN` (the output folder of a `demos/install.py` run
+scenarios found there; the other scenarios' rows are their last outcomes written to this page,
+kept in `docs/scenarios/<scenario>.json`. With `--installed RUN` (the output folder of a `demos/install.py` run
 of the same case on as many ranks), S2 and S4 read that run's stages (those up to its last
 checkpoint: all of them once it has finished), and S3, S4, S5 and S8 also start from the installed
 state: the run's last checkpoint, after its last completed stage. The installation run's own time (the sum of its
@@ -34,10 +37,20 @@ def _figure_name(key: str, relative: str) -> str:
 
 
 def write_page(output: Path, page: Path) -> None:
-    """Rebuild ``page`` from the outcomes in ``output`` (call on one rank)."""
-    outcomes = {k: o for k in SCENARIOS if (o := Outcome.load(output / k)) is not None}
+    """Rebuild ``page`` from the outcomes in ``output`` and, for the scenarios not there, the
+    outcomes kept beside it; keep the new ones there too (call on one rank)."""
+    kept = page.with_suffix("")
     figures = page.parent / "figures" / "scenarios"
     figures.mkdir(parents=True, exist_ok=True)
+    outcomes = {}
+    for k in SCENARIOS:
+        if (o := Outcome.load(output / k / "outcome.json")) is not None:
+            o.save(kept / f"{k}.json")
+            for relative in o.figures:
+                shutil.copyfile(output / k / relative, figures / _figure_name(k, relative))
+        elif (o := Outcome.load(kept / f"{k}.json")) is None:
+            continue
+        outcomes[k] = o
     ranks = {o.ranks for o in outcomes.values()} or {0}
     runs: dict[str, float] = {}
     for o in outcomes.values():
@@ -63,14 +76,11 @@ def write_page(output: Path, page: Path) -> None:
             lines.append(f"Not in this scenario yet: {SCENARIOS[key].needs}.\n")
         for relative in o.figures:
             name = _figure_name(key, relative)
-            shutil.copyfile(output / key / relative, figures / name)
             lines.append(f"![{key} {Path(relative).stem}](figures/scenarios/{name})\n")
     missing = [k for k in SCENARIOS if k not in outcomes]
     if missing:
-        lines.append("\n## Not in the atlas yet\n")
-        lines.append("| scenario | criterion | needs |")
-        lines.append("|---|---|---|")
-        for key in missing:
-            s = SCENARIOS[key]
-            lines.append(f"| {key}: {s.title} | {s.criterion} | {s.needs or 'a run'} |")
+        lines.append("\n## Not run yet\n")
+        lines.append("| scenario | criterion |")
+        lines.append("|---|---|")
+        lines += [f"| {k}: {SCENARIOS[k].title} | {SCENARIOS[k].criterion} |" for k in missing]
     page.write_text("\n".join(lines) + "\n")

@@ -1,5 +1,6 @@
 """The scenario atlas (benchmarks/scenarios.py) on the tiny joint: it runs a list of scenarios,
-makes the runs they share once, and rebuilds its page from every outcome in its output folder;
+makes the runs they share once, and rebuilds its page from every outcome in its output folder
+and those kept beside the page;
 S2 and S4 read the stages of an installation run, S3, S4, S5 and S8 also start from its last
 checkpoint; bad requests are refused before anything runs. (The tiny joint's verdicts say nothing about the
 physics; docs/scenarios.md has the converged joint's.)"""
@@ -11,6 +12,7 @@ import pytest
 from mpi4py import MPI
 
 from benchmarks.atlas.catalogue import SCENARIOS
+from benchmarks.atlas.page import write_page
 from benchmarks.scenarios import main
 from solver.installation.runner import Installation
 
@@ -33,6 +35,7 @@ def test_atlas_runs_scenarios_and_rebuilds_its_page(atlas_output):
     assert main(["S8", *common]) == 0
     assert reference.stat().st_mtime_ns == made  # S8 reads S1's reference run
     assert main(["S5", *common]) == 0
+    assert main(["S7", *common]) == 0
     MPI.COMM_WORLD.Barrier()
     text = page.read_text()
     run = json.loads(reference.read_text())
@@ -48,8 +51,19 @@ def test_atlas_runs_scenarios_and_rebuilds_its_page(atlas_output):
     assert (out / "figures" / "scenarios" / "S5_dismount.png").exists()
     assert "(figures/scenarios/S1_settlement.png)" in text
     assert (out / "figures" / "scenarios" / "S8_frequencies.png").exists()
-    not_yet = text.split("## Not in the atlas yet")[1]
-    assert all(f"| {k}:" in not_yet for k, s in SCENARIOS.items() if s.run is None)
+    not_run = text.split("## Not run yet")[1]
+    assert all(f"| {k}:" in not_run for k in SCENARIOS if k not in ("S1", "S5", "S7", "S8"))
+    sweeps = json.loads((out / "runs_of" / "runs" / "sweeps" / "run.json").read_text())
+    assert set(sweeps["runs"]) == {"steps", "lead-in", "slow", "fast"}
+    assert len(sweeps["runs"]["steps"]["starts_s"]) == 13  # 10 to 130 Hz in 10 Hz steps
+    assert "| S7: sweeps |" in text
+    assert (out / "figures" / "scenarios" / "S7_ramps.png").exists()
+    if MPI.COMM_WORLD.rank == 0:  # the outcomes kept beside the page rebuild it alone
+        assert sorted(p.name for p in (out / "page").iterdir()) == [
+            f"{k}.json" for k in ("S1", "S5", "S7", "S8")
+        ]
+        write_page(out / "no_runs", page)
+        assert page.read_text() == text
 
 
 @pytest.fixture(scope="module")
@@ -117,6 +131,30 @@ def test_s2_s4_s5_s8_from_the_installed_state(installed, atlas_output, tiny_case
     assert (atlas_output / "figures" / "scenarios" / "S4_direction.png").exists()
 
 
+@pytest.mark.slow  # about 3 min serially: three settled joints (friction, damping) and their branches
+def test_s6_selectivity_of_friction_decay_and_damping(atlas_output, tiny_case):
+    out = atlas_output / "runs_of"
+    page = atlas_output / "page_s6.md"
+    assert main(["S6", "--case", "tiny", "--output", str(out), "--docs", str(page)]) == 0
+    MPI.COMM_WORLD.Barrier()
+    stage_s = tiny_case().vibration.stage_duration_s
+    text = page.read_text()
+    for folder in ("selectivity", "selectivity_slow_decay", "selectivity_modal_damping"):
+        r = json.loads((out / "runs" / folder / "run.json").read_text())
+        lead, control, modal = (r["branches"][b]["rows"] for b in ("lead-in", "control", "modal"))
+        assert lead[0][0] == pytest.approx(r["settled"]["time_s"])
+        assert control[0] == modal[0] == lead[-1]  # both branches from the lead-in's end
+        for rows, f in (
+            (control, r["branches"]["control"]["frequency_Hz"]),
+            (modal, r["branches"]["modal"]["forcing_Hz"]),
+        ):
+            periods = (rows[-1][0] - rows[0][0]) * f  # whole periods, about half a stage
+            assert periods == pytest.approx(round(periods), abs=1e-6)
+            assert abs(periods / f - 0.5 * stage_s) <= 0.5 / f
+        assert f"{r['ratio']:.1f} x" in text
+    assert (atlas_output / "figures" / "scenarios" / "S6_selectivity.png").exists()
+
+
 @pytest.mark.slow  # about 6 min on 2 ranks: the tiny joint slides at every amplitude (5 branches)
 def test_s3_from_the_installed_state(installed, atlas_output):
     out = atlas_output / "runs_of"
@@ -157,7 +195,6 @@ def test_installed_state_of_another_case_is_refused(installed, shared_dir, capsy
     [
         (["S9"], "unknown scenario(s) S9"),
         ([], "no scenario given"),
-        (["S7"], "S7 not in the atlas yet"),
         (["S3", "--case", "tiny"], "S3 read(s) an installation run of the case: --installed"),
         (["S2", "--case", "tiny"], "S2 read(s) an installation run of the case: --installed"),
         (["S4", "--case", "tiny"], "S4 read(s) an installation run of the case: --installed"),

@@ -1,0 +1,127 @@
+"""The frequency-selectivity runs of the atlas (docs/physics.md §5.2, the two-stage form of the
+reference sequence): from the joint settled by the case's self-weight stage, a lead-in at the
+run's non-modal control frequency at the modal stages' amplitude (``vibration.amplitude_N``):
+the joint takes the force there; then, from the state after it, the control continued and the
+best-ranked mode (driven at its time-discrete natural frequency), each for the same time. The
+selectivity ratio is the modal branch's settlement rate over its second half over the
+control's (``solver.post.report.frequency_selectivity``'s sustained rate).
+
+Kept as ``run.json`` in its folder (a later call with the same request reads it).
+"""
+
+import json
+import time
+from pathlib import Path
+from typing import Any
+
+from mpi4py import MPI
+
+from benchmarks.atlas.stepping import advance, joint_state
+from benchmarks.branches import settle
+from solver.dynamics.loads import Schedule, Stage
+from solver.installation import checkpoint
+from solver.installation.model import JointModel, attach_vibration
+from solver.installation.planning import compensate
+from solver.post import report
+
+__all__ = ["selectivity_ratio", "selectivity_runs", "sustained_rate"]
+
+
+def sustained_rate(rows: list) -> float:
+    """Settlement rate over the second half of a branch [mm/s], of its (time [s], settlement
+    [mm], normal force [N]) rows."""
+    t = [r[0] for r in rows]
+    s = [r[1] for r in rows]
+    return report.late_gain(t, s, 0.5) / (0.5 * (t[-1] - t[0]))
+
+
+def selectivity_ratio(modal_rows: list, control_rows: list) -> float:
+    """The modal branch's sustained rate over the control's (inf where only the modal branch
+    settles, 0 where neither does)."""
+    modal, control = sustained_rate(modal_rows), sustained_rate(control_rows)
+    if control > 0:
+        return modal / control
+    return float("inf") if modal > 0 else 0.0
+
+
+def _harmonic(model: JointModel, frequency_hz: float, periods: int, amplitude_N: float) -> list:
+    """(time [s], settlement [mm], normal force [N]) rows of ``periods`` periods at
+    ``frequency_hz`` [Hz] and ``amplitude_N`` [N] from now, ``time.steps_per_period`` steps a
+    period."""
+    start = model.problem.t
+    duration = periods / frequency_hz
+    attach_vibration(model, Schedule([Stage(duration, frequency_hz, amplitude_N)], start_s=start))
+    rows = [joint_state(model)]
+    advance(model, start + duration, 1.0 / (frequency_hz * model.case.time.steps_per_period), rows)
+    return rows
+
+
+def selectivity_runs(
+    comm: MPI.Comm,
+    case_name: str,
+    overrides: list[str],
+    folder: Path,
+    lead_in_s: float,
+    duration_s: float,
+) -> dict[str, Any]:
+    """Settle the case's joint, the lead-in of ``lead_in_s`` [s] at the control frequency, then
+    the control and the best mode for ``duration_s`` [s] each (whole periods). Returns (and
+    keeps in ``folder``/run.json) the request, the settled state, per branch (lead-in, control,
+    modal) its rows and frequencies [Hz], the natural frequencies [Hz], the ratio and the wall
+    time [s] (collective)."""
+    path = folder / "run.json"
+    request = {
+        "case": case_name,
+        "overrides": overrides,
+        "lead_in_s": lead_in_s,
+        "duration_s": duration_s,
+    }
+    if path.exists():
+        kept = json.loads(path.read_text())
+        if kept["request"] == request:
+            return kept
+    wall = time.perf_counter()
+    joint = settle(comm, overrides, case_name)
+    model = joint.model
+    case, problem = model.case, model.problem
+    t0, s0, n0 = joint_state(model)
+    scheme, steps = case.vibration_scheme(), case.time.steps_per_period
+    problem.set_scheme(scheme)
+    best = min((e for e in joint.chosen if e.role == "modal"), key=lambda e: e.rank)
+    control = next(e for e in joint.chosen if e.role == "control")
+    modal = compensate([best], [duration_s], scheme, steps)[0]
+    amplitude = case.vibration.amplitude_N
+    f_c, f_m = control.frequency_Hz, modal.drive_Hz
+    branches: dict[str, Any] = {
+        "lead-in": {
+            "rows": _harmonic(model, f_c, max(1, round(lead_in_s * f_c)), amplitude),
+            "frequency_Hz": f_c,
+        }
+    }
+    led = folder / "lead_in"
+    checkpoint.save(led, problem, {})
+    branches["control"] = {
+        "rows": _harmonic(model, f_c, max(1, round(duration_s * f_c)), amplitude),
+        "frequency_Hz": f_c,
+    }
+    checkpoint.restore(led, problem)
+    branches["modal"] = {
+        "rows": _harmonic(model, f_m, max(1, round(duration_s * f_m)), amplitude),
+        "frequency_Hz": best.frequency_Hz,
+        "forcing_Hz": f_m,
+        "m": best.m,
+        "n": best.n,
+    }
+    result = {
+        "request": request,
+        "name": folder.name,
+        "settled": {"time_s": t0, "settlement_mm": s0, "normal_N": n0},
+        "natural_Hz": [float(f) for f in joint.frequencies_hz],
+        "amplitude_N": amplitude,
+        "branches": branches,
+        "ratio": selectivity_ratio(branches["modal"]["rows"], branches["control"]["rows"]),
+        "wall_s": time.perf_counter() - wall,
+    }
+    if comm.rank == 0:
+        path.write_text(json.dumps(result))
+    return result

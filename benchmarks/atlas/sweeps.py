@@ -1,0 +1,153 @@
+"""The sweep runs of the atlas (docs/physics.md §3 and §5.7): from the joint settled by the case's
+self-weight stage,
+
+* a step-wise frequency increase, ``STEPS_HZ`` (10 to 130 Hz in 10 Hz steps) at the
+  eccentric-motor amplitude 0.3632 f^2 N, each step held ``dwell_s``, all at the step of
+  ``steps_per_period`` steps per period of the highest frequency;
+* linear frequency ramps across the best-ranked mode, from ``centre / (1 + span)`` to
+  ``centre (1 + span)``, centre its time-discrete natural frequency at the ramps' step, at the
+  modal stages' amplitude (``vibration.amplitude_N``): first a lead-in held at the ramps' start
+  frequency for whole periods (the joint takes the force there, off resonance), then from that
+  state a slow ramp of ``slow_s`` and a fast one ``speed_up`` times shorter, at one step (so they
+  share the operator and the contact solver's factors and compliance blocks).
+
+Kept as ``run.json`` in its folder (a later call with the same request reads it).
+"""
+
+import json
+import time
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+from mpi4py import MPI
+
+from benchmarks.atlas.stepping import advance, joint_state
+from benchmarks.branches import settle
+from solver.dynamics.fidelity import discrete_frequency
+from solver.dynamics.loads import Schedule, Stage, frequency_ramp, frequency_steps
+from solver.installation import checkpoint
+from solver.installation.model import JointModel, attach_vibration
+
+__all__ = ["STEPS_HZ", "nearest_mode", "settling_peaks", "step_gains", "sweep_runs"]
+
+STEPS_HZ = (10.0, 130.0, 10.0)  #: the step-wise sweep: first, last frequency, step [Hz]
+LEAD_IN_PERIODS = 5  #: periods of the ramps' lead-in at their start frequency
+
+
+def step_gains(rows: list, starts_s: list[float], dwell_s: float) -> list[float]:
+    """Settlement gained in each step of a step-wise sweep [mm], of its (time [s], settlement
+    [mm], normal force [N]) rows and the steps' start times [s] (interpolated at the bounds)."""
+    t, s, _ = np.array(rows).T
+    bounds = np.interp(np.r_[starts_s, starts_s[-1] + dwell_s], t, s)
+    return np.diff(bounds).tolist()
+
+
+def settling_peaks(gains: list[float]) -> list[int]:
+    """The steps of a step-wise sweep that settle more than both neighbours (the first and last
+    step: than their one neighbour), of the settlement gained per step."""
+    g = np.r_[-np.inf, gains, -np.inf]
+    return [k for k in range(len(gains)) if g[k + 1] > 0 and g[k + 1] > max(g[k], g[k + 2])]
+
+
+def nearest_mode(frequency_hz: float, natural_hz: list[float]) -> tuple[float, float]:
+    """The natural frequency [Hz] nearest in ratio to ``frequency_hz`` (of the positive ones)
+    and the relative distance frequency / natural - 1 [-]."""
+    f_n = min((f for f in natural_hz if f > 0), key=lambda f: abs(np.log(frequency_hz / f)))
+    return f_n, frequency_hz / f_n - 1.0
+
+
+def _schedule_run(model: JointModel, schedule: Schedule, dt: float) -> list:
+    """(time [s], settlement [mm], normal force [N]) rows of ``schedule`` from now, step ``dt``."""
+    attach_vibration(model, schedule)
+    rows = [joint_state(model)]
+    advance(model, schedule.end_s, dt, rows)
+    return rows
+
+
+def sweep_runs(
+    comm: MPI.Comm,
+    case_name: str,
+    overrides: list[str],
+    folder: Path,
+    dwell_s: float,
+    slow_s: float,
+    speed_up: float,
+    span: float,
+) -> dict[str, Any]:
+    """Settle the case's joint, then the step-wise sweep (steps of ``dwell_s`` [s]) and, from
+    the settled state again, the lead-in and the slow (``slow_s`` [s]) and fast (``slow_s /
+    speed_up``) ramps across the best-ranked mode, +- ``span`` (a fraction) about it. Returns
+    (and keeps in ``folder``/run.json) the request, the settled state, the natural frequencies
+    [Hz], the best mode (nominal and driven [Hz]), per run its (time [s], settlement [mm],
+    normal force [N]) rows with its step [s] and frequencies, and the wall time [s]
+    (collective)."""
+    path = folder / "run.json"
+    request = {
+        "case": case_name,
+        "overrides": overrides,
+        "dwell_s": dwell_s,
+        "slow_s": slow_s,
+        "speed_up": speed_up,
+        "span": span,
+    }
+    if path.exists():
+        kept = json.loads(path.read_text())
+        if kept["request"] == request:
+            return kept
+    wall = time.perf_counter()
+    joint = settle(comm, overrides, case_name)
+    model = joint.model
+    case, problem = model.case, model.problem
+    t0, s0, n0 = joint_state(model)
+    settled = folder / "settled"
+    checkpoint.save(settled, problem, {})
+    scheme, steps = case.vibration_scheme(), case.time.steps_per_period
+    problem.set_scheme(scheme)
+
+    f_start, f_stop, f_step = STEPS_HZ
+    stages = frequency_steps(f_start, f_stop, f_step, dwell_s, "eccentric")
+    dt_steps = 1.0 / (steps * f_stop)
+    schedule = Schedule(stages, start_s=t0)
+    runs: dict[str, Any] = {
+        "steps": {
+            "rows": _schedule_run(model, schedule, dt_steps),
+            "dt_s": dt_steps,
+            "frequencies_Hz": [s.frequency_hz for s in stages],
+            "starts_s": schedule.stage_starts.tolist(),
+        }
+    }
+
+    best = min((e for e in joint.chosen if e.role == "modal"), key=lambda e: e.rank)
+    dt = 1.0 / (steps * (1.0 + span) ** 2 * best.frequency_Hz)  # >= steps per period at the top
+    centre = float(discrete_frequency(scheme, best.frequency_Hz, dt))
+    low, high = centre / (1.0 + span), centre * (1.0 + span)
+    amplitude = case.vibration.amplitude_N
+    checkpoint.restore(settled, problem)
+    lead = Schedule([Stage(LEAD_IN_PERIODS / low, low, amplitude)], start_s=t0)
+    runs["lead-in"] = {"rows": _schedule_run(model, lead, dt), "dt_s": dt, "frequency_Hz": low}
+    led = folder / "lead_in"
+    checkpoint.save(led, problem, {})
+    for name, duration in (("slow", slow_s), ("fast", slow_s / speed_up)):
+        checkpoint.restore(led, problem)
+        ramp = Schedule(frequency_ramp(low, high, duration, amplitude), start_s=problem.t)
+        runs[name] = {
+            "rows": _schedule_run(model, ramp, dt),
+            "dt_s": dt,
+            "duration_s": duration,
+            "sweep_rate_Hz_s": (high - low) / duration,
+        }
+    result = {
+        "request": request,
+        "name": folder.name,
+        "settled": {"time_s": t0, "settlement_mm": s0, "normal_N": n0},
+        "natural_Hz": [float(f) for f in joint.frequencies_hz],
+        "best": {"frequency_Hz": best.frequency_Hz, "centre_Hz": centre, "m": best.m, "n": best.n},
+        "ramp_Hz": [low, high],
+        "amplitude_N": amplitude,
+        "runs": runs,
+        "wall_s": time.perf_counter() - wall,
+    }
+    if comm.rank == 0:
+        path.write_text(json.dumps(result))
+    return result
