@@ -18,8 +18,8 @@ amplitude (history.csv, stages.csv, contact_status_<k>.png, summary.txt, ...). -
 maps. The modal stage is off by default (--modal turns it on): while the imperfect TP rests on a
 few points it is a mechanism with zero-frequency modes, on which the mode ranking fails.
 
-Without options: cases/imperfections.toml (the very coarse frictional joint of the
-demos/install.py default run). --quick: coarser contact map grids and --case
+Without options: cases/imperfections.toml (the coarse frictional joint, 8 around,
+0.25 m, whose shell modes lock: docs/install.md "Discretisation"). --quick: coarser contact map grids and --case
 imperfections_quick (the demos' smoke-run joint with 4 ms stages; not physics).
 
 Usage: mpirun -n 2 python demos/imperfections.py [--scan FILE] [--ovality-mm 0.3]
