@@ -25,13 +25,13 @@ import numpy as np
 from mpi4py import MPI
 
 from benchmarks.atlas.installed import restore_installed
-from benchmarks.atlas.stepping import advance, joint_state
+from benchmarks.atlas.stepping import run_schedule
 from common.case import read_case
 from solver.dynamics.loads import Schedule, Stage
 from solver.installation import checkpoint
 from solver.installation.case import InstallationCase
 from solver.installation.frequencies import Excitation
-from solver.installation.model import JointModel, attach_vibration
+from solver.installation.model import JointModel
 from solver.installation.planning import stage_step
 from solver.post import report
 
@@ -126,12 +126,9 @@ class _Branches:
         if dt != self._step:  # the branches at one step share the operator and the solver
             problem.set_scheme(self.case.vibration_scheme())
             self._step = dt
-        start = problem.t
         amplitude = factor * self.case.vibration.amplitude_N
-        attach_vibration(model, Schedule([Stage(duration, frequency_hz, amplitude)], start_s=start))
-        rows = [joint_state(model)]
-        advance(model, start + duration, dt, rows)
-        return rows
+        schedule = Schedule([Stage(duration, frequency_hz, amplitude)], start_s=problem.t)
+        return run_schedule(model, schedule, dt)
 
 
 def amplitude_runs(

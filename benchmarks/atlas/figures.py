@@ -100,9 +100,10 @@ def plot_sequence(
 ) -> None:
     """Left: settlement [mm] and excitation frequency [Hz] against time [s], the stages shaded
     by role; right: the settlement gained per vibration stage [um] against its frequency [Hz],
-    the natural frequencies of the settled joint marked. ``history``/``stages``: an
-    installation run's rows; ``roles``: each stage's role (self-weight, lead-in, modal,
-    control)."""
+    the natural frequencies of the settled joint marked. ``history``/``stages``: rows as an
+    installation run writes them (``time_s``, ``settlement_mm``, ``frequency_Hz``; ``start_s``,
+    ``end_s``, ``frequency_Hz``, ``gained_mm``); ``roles``: each stage's role, a key of
+    ``ROLE_COLOURS``."""
     plt = _pyplot()
     fig, (ax, ax_f) = plt.subplots(1, 2, figsize=(13, 4.5), gridspec_kw={"width_ratios": [3, 2]})
     t = np.array([r["time_s"] for r in history])
@@ -145,10 +146,15 @@ def plot_sequence(
 
 
 def plot_ramps(
-    ramps: dict[str, tuple[np.ndarray, np.ndarray]], natural_hz: list[float], path: Path, title: str
+    ramps: dict[str, tuple[np.ndarray, np.ndarray]],
+    natural_hz: list[float],
+    discrete_hz: float,
+    path: Path,
+    title: str,
 ) -> None:
     """Settlement gained [um] against the excitation frequency [Hz] of linear frequency ramps
-    (frequency and gain arrays by label), the natural frequencies in the ramps' range marked."""
+    (frequency and gain arrays by label); the natural frequencies in the ramps' range marked,
+    and ``discrete_hz``, the time-discrete natural frequency of the mode the ramps cross."""
     plt = _pyplot()
     fig, ax = plt.subplots(figsize=(8, 4))
     for label, (f, gained) in ramps.items():
@@ -159,6 +165,7 @@ def plot_ramps(
         ax.axvline(
             fn, color="tab:blue", ls=":", lw=0.8, label="natural frequency" if k == 0 else None
         )
+    ax.axvline(discrete_hz, color="tab:blue", ls="--", lw=0.8, label="its time-discrete frequency")
     ax.set_xlabel("excitation frequency [Hz]")
     ax.set_ylabel("settlement gained in the ramp [um]")
     ax.set_title(title)

@@ -16,15 +16,15 @@ from typing import Any
 
 from mpi4py import MPI
 
-from benchmarks.atlas.stepping import advance, joint_state
+from benchmarks.atlas.stepping import joint_state, run_schedule
 from benchmarks.branches import settle
 from solver.dynamics.loads import Schedule, Stage
 from solver.installation import checkpoint
-from solver.installation.model import JointModel, attach_vibration
-from solver.installation.planning import compensate
+from solver.installation.model import JointModel
+from solver.installation.planning import compensate, stage_step
 from solver.post import report
 
-__all__ = ["selectivity_ratio", "selectivity_runs", "sustained_rate"]
+__all__ = ["selectivity_ratio", "selectivity_runs", "sustained_rate", "whole_periods"]
 
 
 def sustained_rate(rows: list) -> float:
@@ -36,24 +36,24 @@ def sustained_rate(rows: list) -> float:
 
 
 def selectivity_ratio(modal_rows: list, control_rows: list) -> float:
-    """The modal branch's sustained rate over the control's (inf where only the modal branch
-    settles, 0 where neither does)."""
-    modal, control = sustained_rate(modal_rows), sustained_rate(control_rows)
-    if control > 0:
-        return modal / control
-    return float("inf") if modal > 0 else 0.0
+    """The modal branch's sustained rate over the control's (``report.rate_ratio``)."""
+    return report.rate_ratio(sustained_rate(modal_rows), sustained_rate(control_rows))
 
 
-def _harmonic(model: JointModel, frequency_hz: float, periods: int, amplitude_N: float) -> list:
-    """(time [s], settlement [mm], normal force [N]) rows of ``periods`` periods at
-    ``frequency_hz`` [Hz] and ``amplitude_N`` [N] from now, ``time.steps_per_period`` steps a
-    period."""
-    start = model.problem.t
-    duration = periods / frequency_hz
-    attach_vibration(model, Schedule([Stage(duration, frequency_hz, amplitude_N)], start_s=start))
-    rows = [joint_state(model)]
-    advance(model, start + duration, 1.0 / (frequency_hz * model.case.time.steps_per_period), rows)
-    return rows
+def whole_periods(duration_s: float, frequency_hz: float) -> float:
+    """The whole number of periods of ``frequency_hz`` [Hz] nearest to ``duration_s`` (at least
+    one) [s]: a branch that ends at phase zero ends where the force is zero."""
+    return max(1, round(duration_s * frequency_hz)) / frequency_hz
+
+
+def _harmonic(
+    model: JointModel, frequency_hz: float, duration_s: float, amplitude_N: float
+) -> list:
+    """``joint_state`` rows of ``duration_s`` [s] at ``frequency_hz`` [Hz] and ``amplitude_N``
+    [N] from now, at the installation run's step for such a stage (``planning.stage_step``)."""
+    dt = stage_step(duration_s, frequency_hz, model.case.time.steps_per_period)
+    stage = Stage(duration_s, frequency_hz, amplitude_N)
+    return run_schedule(model, Schedule([stage], start_s=model.problem.t), dt)
 
 
 def selectivity_runs(
@@ -65,10 +65,10 @@ def selectivity_runs(
     duration_s: float,
 ) -> dict[str, Any]:
     """Settle the case's joint, the lead-in of ``lead_in_s`` [s] at the control frequency, then
-    the control and the best mode for ``duration_s`` [s] each (whole periods). Returns (and
-    keeps in ``folder``/run.json) the request, the settled state, per branch (lead-in, control,
-    modal) its rows and frequencies [Hz], the natural frequencies [Hz], the ratio and the wall
-    time [s] (collective)."""
+    the control and the best mode for ``duration_s`` [s] each (to whole periods of the control
+    and of the mode's natural frequency). Returns (and keeps in ``folder``/run.json) the request,
+    the settled state, per branch (lead-in, control, modal) its rows and frequencies [Hz], the
+    natural frequencies [Hz] and the wall time [s] (collective)."""
     path = folder / "run.json"
     request = {
         "case": case_name,
@@ -89,24 +89,24 @@ def selectivity_runs(
     problem.set_scheme(scheme)
     best = min((e for e in joint.chosen if e.role == "modal"), key=lambda e: e.rank)
     control = next(e for e in joint.chosen if e.role == "control")
-    modal = compensate([best], [duration_s], scheme, steps)[0]
-    amplitude = case.vibration.amplitude_N
-    f_c, f_m = control.frequency_Hz, modal.drive_Hz
+    f_c, amplitude = control.frequency_Hz, case.vibration.amplitude_N
+    modal_s = whole_periods(duration_s, best.frequency_Hz)  # driven at f_m, a little off phase 0
+    f_m = compensate([best], [modal_s], scheme, steps)[0].drive_Hz
     branches: dict[str, Any] = {
         "lead-in": {
-            "rows": _harmonic(model, f_c, max(1, round(lead_in_s * f_c)), amplitude),
+            "rows": _harmonic(model, f_c, whole_periods(lead_in_s, f_c), amplitude),
             "frequency_Hz": f_c,
         }
     }
     led = folder / "lead_in"
     checkpoint.save(led, problem, {})
     branches["control"] = {
-        "rows": _harmonic(model, f_c, max(1, round(duration_s * f_c)), amplitude),
+        "rows": _harmonic(model, f_c, whole_periods(duration_s, f_c), amplitude),
         "frequency_Hz": f_c,
     }
     checkpoint.restore(led, problem)
     branches["modal"] = {
-        "rows": _harmonic(model, f_m, max(1, round(duration_s * f_m)), amplitude),
+        "rows": _harmonic(model, f_m, modal_s, amplitude),
         "frequency_Hz": best.frequency_Hz,
         "forcing_Hz": f_m,
         "m": best.m,
@@ -119,7 +119,6 @@ def selectivity_runs(
         "natural_Hz": [float(f) for f in joint.frequencies_hz],
         "amplitude_N": amplitude,
         "branches": branches,
-        "ratio": selectivity_ratio(branches["modal"]["rows"], branches["control"]["rows"]),
         "wall_s": time.perf_counter() - wall,
     }
     if comm.rank == 0:

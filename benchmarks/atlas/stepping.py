@@ -1,10 +1,11 @@
 """Time stepping of the atlas's branches from a saved state: the joint's time, settlement and
-contact normal force recorded after every step."""
+contact normal force recorded after every step, with or without a new excitation."""
 
+from solver.dynamics.loads import Schedule
 from solver.dynamics.time_loop import run
-from solver.installation.model import JointModel
+from solver.installation.model import JointModel, attach_vibration
 
-__all__ = ["advance", "joint_state"]
+__all__ = ["advance", "joint_state", "run_schedule"]
 
 
 def joint_state(model: JointModel) -> tuple[float, float, float]:
@@ -23,3 +24,12 @@ def advance(model: JointModel, t_end: float, dt: float, rows: list) -> None:
 
     dt_min = dt * model.case.time.dt_min_fraction
     run(model.problem, t_end, dt, dt_min=dt_min, observers=[observe], progress=False)
+
+
+def run_schedule(model: JointModel, schedule: Schedule, dt: float) -> list:
+    """Excite the joint with ``schedule`` (from now to its end) with step ``dt`` [s]; its
+    ``joint_state`` rows, the first one now."""
+    attach_vibration(model, schedule)
+    rows = [joint_state(model)]
+    advance(model, schedule.end_s, dt, rows)
+    return rows

@@ -8,8 +8,13 @@ self-weight stage,
   ``centre (1 + span)``, centre its time-discrete natural frequency at the ramps' step, at the
   modal stages' amplitude (``vibration.amplitude_N``): first a lead-in held at the ramps' start
   frequency for whole periods (the joint takes the force there, off resonance), then from that
-  state a slow ramp of ``slow_s`` and a fast one ``speed_up`` times shorter, at one step (so they
-  share the operator and the contact solver's factors and compliance blocks).
+  state a slow ramp of ``slow_s`` and a fast one ``speed_up`` times shorter, all at the step of
+  ``steps_per_period`` steps per period of the highest frequency (a run whose duration is not a
+  whole number of steps ends with a shorter step, at the cost of a new operator).
+
+The unexcited joint, from the same settled state for as long as the step-wise sweep
+(``unexcited_run``), is what the sweep's settlement is measured against: after its self-weight
+stage the joint may still settle under the held force.
 
 Kept as ``run.json`` in its folder (a later call with the same request reads it).
 """
@@ -22,14 +27,24 @@ from typing import Any
 import numpy as np
 from mpi4py import MPI
 
-from benchmarks.atlas.stepping import advance, joint_state
+from benchmarks.atlas.stepping import advance, joint_state, run_schedule
 from benchmarks.branches import settle
+from common.case import read_case
 from solver.dynamics.fidelity import discrete_frequency
 from solver.dynamics.loads import Schedule, Stage, frequency_ramp, frequency_steps
+from solver.dynamics.schemes import GeneralisedAlpha
 from solver.installation import checkpoint
-from solver.installation.model import JointModel, attach_vibration
+from solver.installation.case import InstallationCase
+from solver.installation.model import set_up_joint_model
 
-__all__ = ["STEPS_HZ", "nearest_mode", "settling_peaks", "step_gains", "sweep_runs"]
+__all__ = [
+    "STEPS_HZ",
+    "nearest_mode",
+    "settling_peaks",
+    "step_gains",
+    "sweep_runs",
+    "unexcited_run",
+]
 
 STEPS_HZ = (10.0, 130.0, 10.0)  #: the step-wise sweep: first, last frequency, step [Hz]
 LEAD_IN_PERIODS = 5  #: periods of the ramps' lead-in at their start frequency
@@ -44,10 +59,10 @@ def step_gains(rows: list, starts_s: list[float], dwell_s: float) -> list[float]
 
 
 def settling_peaks(gains: list[float]) -> list[int]:
-    """The steps of a step-wise sweep that settle more than both neighbours (the first and last
-    step: than their one neighbour), of the settlement gained per step."""
-    g = np.r_[-np.inf, gains, -np.inf]
-    return [k for k in range(len(gains)) if g[k + 1] > 0 and g[k + 1] > max(g[k], g[k + 2])]
+    """The steps of a step-wise sweep that settle more than both their neighbours (so neither
+    the first nor the last step), of the settlement gained per step."""
+    g = gains
+    return [k for k in range(1, len(g) - 1) if g[k] > 0 and g[k] > max(g[k - 1], g[k + 1])]
 
 
 def nearest_mode(frequency_hz: float, natural_hz: list[float]) -> tuple[float, float]:
@@ -55,14 +70,6 @@ def nearest_mode(frequency_hz: float, natural_hz: list[float]) -> tuple[float, f
     and the relative distance frequency / natural - 1 [-]."""
     f_n = min((f for f in natural_hz if f > 0), key=lambda f: abs(np.log(frequency_hz / f)))
     return f_n, frequency_hz / f_n - 1.0
-
-
-def _schedule_run(model: JointModel, schedule: Schedule, dt: float) -> list:
-    """(time [s], settlement [mm], normal force [N]) rows of ``schedule`` from now, step ``dt``."""
-    attach_vibration(model, schedule)
-    rows = [joint_state(model)]
-    advance(model, schedule.end_s, dt, rows)
-    return rows
 
 
 def sweep_runs(
@@ -111,7 +118,7 @@ def sweep_runs(
     schedule = Schedule(stages, start_s=t0)
     runs: dict[str, Any] = {
         "steps": {
-            "rows": _schedule_run(model, schedule, dt_steps),
+            "rows": run_schedule(model, schedule, dt_steps),
             "dt_s": dt_steps,
             "frequencies_Hz": [s.frequency_hz for s in stages],
             "starts_s": schedule.stage_starts.tolist(),
@@ -120,19 +127,21 @@ def sweep_runs(
 
     best = min((e for e in joint.chosen if e.role == "modal"), key=lambda e: e.rank)
     dt = 1.0 / (steps * (1.0 + span) ** 2 * best.frequency_Hz)  # >= steps per period at the top
-    centre = float(discrete_frequency(scheme, best.frequency_Hz, dt))
+    centre = best.frequency_Hz  # the time-discrete frequency of the mode, where there is one
+    if isinstance(scheme, GeneralisedAlpha):
+        centre = float(discrete_frequency(scheme, best.frequency_Hz, dt))
     low, high = centre / (1.0 + span), centre * (1.0 + span)
     amplitude = case.vibration.amplitude_N
     checkpoint.restore(settled, problem)
     lead = Schedule([Stage(LEAD_IN_PERIODS / low, low, amplitude)], start_s=t0)
-    runs["lead-in"] = {"rows": _schedule_run(model, lead, dt), "dt_s": dt, "frequency_Hz": low}
+    runs["lead-in"] = {"rows": run_schedule(model, lead, dt), "dt_s": dt, "frequency_Hz": low}
     led = folder / "lead_in"
     checkpoint.save(led, problem, {})
     for name, duration in (("slow", slow_s), ("fast", slow_s / speed_up)):
         checkpoint.restore(led, problem)
         ramp = Schedule(frequency_ramp(low, high, duration, amplitude), start_s=problem.t)
         runs[name] = {
-            "rows": _schedule_run(model, ramp, dt),
+            "rows": run_schedule(model, ramp, dt),
             "dt_s": dt,
             "duration_s": duration,
             "sweep_rate_Hz_s": (high - low) / duration,
@@ -149,5 +158,46 @@ def sweep_runs(
         "wall_s": time.perf_counter() - wall,
     }
     if comm.rank == 0:
+        path.write_text(json.dumps(result))
+    return result
+
+
+def unexcited_run(
+    comm: MPI.Comm, case_name: str, overrides: list[str], folder: Path, sweeps: dict[str, Any]
+) -> dict[str, Any]:
+    """The joint without excitation from the settled state of the sweep runs ``sweeps`` (kept in
+    their folder) for as long as their step-wise sweep, under the held self-weight force, with
+    the self-weight stage's step and the vibration scheme. Returns (and keeps in
+    ``folder``/run.json) the request, its (time [s], settlement [mm], normal force [N]) rows and
+    the wall time [s] (collective)."""
+    path = folder / "run.json"
+    steps = sweeps["runs"]["steps"]
+    duration = steps["rows"][-1][0] - steps["rows"][0][0]
+    request = {
+        "case": case_name,
+        "overrides": overrides,
+        "settled": sweeps["settled"],
+        "duration_s": duration,
+    }
+    if path.exists():
+        kept = json.loads(path.read_text())
+        if kept["request"] == request:
+            return kept
+    wall = time.perf_counter()
+    case = InstallationCase.from_dict(read_case(case_name, overrides))
+    model = set_up_joint_model(comm, case)
+    problem = model.problem
+    checkpoint.restore(folder.parent / sweeps["name"] / "settled", problem)
+    problem.set_scheme(case.vibration_scheme())
+    rows = [joint_state(model)]
+    advance(model, problem.t + duration, case.self_weight.dt_s, rows)
+    result = {
+        "request": request,
+        "name": folder.name,
+        "rows": rows,
+        "wall_s": time.perf_counter() - wall,
+    }
+    if comm.rank == 0:
+        folder.mkdir(parents=True, exist_ok=True)
         path.write_text(json.dumps(result))
     return result

@@ -227,6 +227,12 @@ def format_stabilisation(stages: list[dict]) -> list[str]:
     ]
 
 
+def rate_ratio(rate: float, control_rate: float) -> float:
+    """A settlement rate over the control's [-]: inf where only the first settles, 0 where
+    neither does."""
+    return rate / control_rate if control_rate > 0 else (np.inf if rate > 0 else 0.0)
+
+
 def frequency_selectivity(stages: list[dict], excitations) -> list[dict[str, float]]:
     """Sustained settlement rate of each modal vibration stage over that of the control stage
     at the same amplitude (docs/physics.md §5.2: frequency-driven settlement).
@@ -246,9 +252,6 @@ def frequency_selectivity(stages: list[dict], excitations) -> list[dict[str, flo
     def rates(s: dict) -> tuple[float, float]:
         half = 0.5 * (s["end_s"] - s["start_s"])
         return s["gained_second_half_mm"] / half, s["gained_mm"] / (2 * half)
-
-    def ratio(r: float, c: float) -> float:
-        return r / c if c > 0 else (np.inf if r > 0 else 0.0)
 
     controls = [s for s in stages if s["stage"] in roles and roles[s["stage"]].role == "control"]
     if not controls or not controls[0]["steps"]:
@@ -274,8 +277,8 @@ def frequency_selectivity(stages: list[dict], excitations) -> list[dict[str, flo
                 "control_Hz": control["frequency_Hz"],
                 "control_rate_mm_s": c,
                 "control_stage_rate_mm_s": c_stage,
-                "ratio": ratio(r, c),
-                "stage_ratio": ratio(r_stage, c_stage),
+                "ratio": rate_ratio(r, c),
+                "stage_ratio": rate_ratio(r_stage, c_stage),
             }
         )
     return rows

@@ -13,6 +13,7 @@ from mpi4py import MPI
 
 from benchmarks.atlas.catalogue import SCENARIOS
 from benchmarks.atlas.page import write_page
+from benchmarks.atlas.selectivity import selectivity_ratio
 from benchmarks.scenarios import main
 from solver.installation.runner import Installation
 
@@ -56,6 +57,10 @@ def test_atlas_runs_scenarios_and_rebuilds_its_page(atlas_output):
     sweeps = json.loads((out / "runs_of" / "runs" / "sweeps" / "run.json").read_text())
     assert set(sweeps["runs"]) == {"steps", "lead-in", "slow", "fast"}
     assert len(sweeps["runs"]["steps"]["starts_s"]) == 13  # 10 to 130 Hz in 10 Hz steps
+    unexcited = json.loads((out / "runs_of" / "runs" / "sweeps_unexcited" / "run.json").read_text())
+    steps = sweeps["runs"]["steps"]["rows"]
+    assert unexcited["rows"][0][:2] == steps[0][:2]  # from the same settled state, as long
+    assert unexcited["rows"][-1][0] == pytest.approx(steps[-1][0])
     assert "| S7: sweeps |" in text
     assert (out / "figures" / "scenarios" / "S7_ramps.png").exists()
     if MPI.COMM_WORLD.rank == 0:  # the outcomes kept beside the page rebuild it alone
@@ -143,15 +148,16 @@ def test_s6_selectivity_of_friction_decay_and_damping(atlas_output, tiny_case):
         r = json.loads((out / "runs" / folder / "run.json").read_text())
         lead, control, modal = (r["branches"][b]["rows"] for b in ("lead-in", "control", "modal"))
         assert lead[0][0] == pytest.approx(r["settled"]["time_s"])
-        assert control[0] == modal[0] == lead[-1]  # both branches from the lead-in's end
-        for rows, f in (
-            (control, r["branches"]["control"]["frequency_Hz"]),
-            (modal, r["branches"]["modal"]["forcing_Hz"]),
-        ):
+        # the modal branch restarts from the lead-in's end (the control goes on from there)
+        assert modal[0][:2] == lead[-1][:2]
+        assert modal[0][2] == pytest.approx(lead[-1][2], rel=1e-8)
+        natural = r["branches"]["modal"]["frequency_Hz"]
+        for rows, f in ((lead, r["branches"]["control"]["frequency_Hz"]), (modal, natural)):
             periods = (rows[-1][0] - rows[0][0]) * f  # whole periods, about half a stage
             assert periods == pytest.approx(round(periods), abs=1e-6)
             assert abs(periods / f - 0.5 * stage_s) <= 0.5 / f
-        assert f"{r['ratio']:.1f} x" in text
+        assert control[-1][0] - control[0][0] == pytest.approx(lead[-1][0] - lead[0][0])
+        assert f"{selectivity_ratio(modal, control):.1f} x" in text
     assert (atlas_output / "figures" / "scenarios" / "S6_selectivity.png").exists()
 
 

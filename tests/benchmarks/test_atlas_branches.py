@@ -22,11 +22,12 @@ def test_step_gains_of_a_piecewise_linear_history():
 @pytest.mark.parametrize(
     "gains, peaks",
     [
-        ([0.0, 1.0, 0.5, 2.0, 3.0], [1, 4]),
-        ([3.0, 1.0, 2.0], [0, 2]),
+        ([0.0, 1.0, 0.5, 2.0, 3.0], [1]),  # the last step has no next one to compare with
+        ([3.0, 1.0, 2.0], []),  # nor the first a previous one
+        ([0.0, 2.0, 0.0, 3.0, 0.0], [1, 3]),
         ([0.0, 0.0, 0.0], []),  # no step settles
-        ([-1.0, -2.0, -1.5], []),  # heaves are not settlement
-        ([1.0, 1.0, 0.5], []),  # a tie is no peak
+        ([-1.0, -0.5, -1.5], []),  # heaves are not settlement
+        ([1.0, 2.0, 2.0, 0.5], []),  # a tie is no peak
     ],
 )
 def test_settling_peaks(gains, peaks):
