@@ -40,6 +40,7 @@ from solver.installation.model import set_up_joint_model
 __all__ = [
     "STEPS_HZ",
     "nearest_mode",
+    "ramp_band_gains",
     "settling_peaks",
     "step_gains",
     "sweep_runs",
@@ -56,6 +57,15 @@ def step_gains(rows: list, starts_s: list[float], dwell_s: float) -> list[float]
     t, s, _ = np.array(rows).T
     bounds = np.interp(np.r_[starts_s, starts_s[-1] + dwell_s], t, s)
     return np.diff(bounds).tolist()
+
+
+def ramp_band_gains(rows: list, f_start: float, f_stop: float, bands: int) -> list[float]:
+    """Settlement gained [mm] in each of ``bands`` equal parts of a linear frequency ramp from
+    ``f_start`` to ``f_stop`` [Hz], of its (time [s], settlement [mm], normal force [N]) rows
+    (the ramp's time span is that of the rows)."""
+    t, s, _ = np.array(rows).T
+    f = f_start + (f_stop - f_start) * (t - t[0]) / (t[-1] - t[0])
+    return np.diff(np.interp(np.linspace(f_start, f_stop, bands + 1), f, s)).tolist()
 
 
 def settling_peaks(gains: list[float]) -> list[int]:

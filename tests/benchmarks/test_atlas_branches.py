@@ -7,7 +7,7 @@ import numpy as np
 import pytest
 
 from benchmarks.atlas.selectivity import selectivity_ratio, sustained_rate
-from benchmarks.atlas.sweeps import nearest_mode, settling_peaks, step_gains
+from benchmarks.atlas.sweeps import nearest_mode, ramp_band_gains, settling_peaks, step_gains
 
 
 def test_step_gains_of_a_piecewise_linear_history():
@@ -58,3 +58,11 @@ def test_selectivity_ratio(modal, control, ratio):
         return [(t, rate * t, 1e4) for t in np.linspace(0.0, 0.1, 5)]
 
     assert selectivity_ratio(branch(modal), branch(control)) == pytest.approx(ratio)
+
+
+def test_ramp_band_gains():
+    t = np.linspace(0.0, 0.2, 81)  # a ramp 100 -> 120 Hz over 0.2 s: 100 Hz/s
+    f = 100.0 + 100.0 * t
+    s = np.where(f < 110.0, 0.0, 0.5 * (f - 110.0))  # 0.5 mm/Hz above 110 Hz
+    rows = [(ti, si, 1e4) for ti, si in zip(t, s)]
+    assert ramp_band_gains(rows, 100.0, 120.0, 4) == pytest.approx([0.0, 0.0, 2.5, 2.5])
