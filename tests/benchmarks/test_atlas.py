@@ -36,7 +36,9 @@ def test_atlas_runs_scenarios_and_rebuilds_its_page(atlas_output):
     assert main(["S8", *common]) == 0
     assert reference.stat().st_mtime_ns == made  # S8 reads S1's reference run
     assert main(["S5", *common]) == 0
-    assert main(["S7", *common]) == 0
+    # the sweeps on the tiny joint with friction: frictionless, its TP keeps sliding under the
+    # self-weight force and Newton fails in the ramps' lead-in on 2 ranks
+    assert main(["S7", *common, "--set", "friction.mu_s=0.3", "--set", "friction.mu_d=0.3"]) == 0
     MPI.COMM_WORLD.Barrier()
     text = page.read_text()
     run = json.loads(reference.read_text())
