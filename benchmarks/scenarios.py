@@ -8,7 +8,8 @@ docs/scenarios.md (``benchmarks/atlas``).
 
 The joint is ``--case`` (default ``scaled``: the converged joint, 48 around, P2) with
 ``--set`` overrides. Each scenario prints its wall time; the page is rebuilt from every outcome
-in ``--output``.
+in ``--output`` and, for the scenarios not there, from the outcomes kept beside the page
+(``docs/scenarios/<key>.json``).
 """
 
 import argparse
