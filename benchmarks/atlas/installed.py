@@ -1,6 +1,7 @@
 """The installed state of the atlas: the last checkpoint of an installation run of the case
-(``demos/install.py``, the state after its last completed stage), checked against the case,
-restored, and the natural frequencies of the joint in that state (docs/physics.md §5.8).
+(``demos/install.py``, the state after its last completed stage), or the state it kept after
+one of its stages (``[output] stage_states``), checked against the case, restored, and the
+natural frequencies of the joint in that state (docs/physics.md §5.8).
 
 A modal run is kept as ``run.json`` in its folder (a later call with the same request reads it).
 """
@@ -21,14 +22,29 @@ from solver.installation.model import JointModel, set_up_joint_model, settled_mo
 from solver.modal.eigen import EigenOptions, modal_analysis
 from solver.modal.interface import bonded_band
 
-__all__ = ["installed_modes", "installed_state", "restore_installed"]
+__all__ = ["installed_modes", "installed_state", "kept_stages", "restore_installed"]
 
 
-def installed_state(comm: MPI.Comm, case: InstallationCase, run_folder: Path) -> dict[str, Any]:
-    """The manifest of the last checkpoint of the installation run in ``run_folder``
-    (collective). ValueError where there is none, it was written on another number of ranks or
-    the run was of another case (its ``[output]`` table aside)."""
-    folder = run_folder / "checkpoint"
+def _state_folder(run_folder: Path, stage: int | None) -> Path:
+    return run_folder / "checkpoint" if stage is None else run_folder / "states" / str(stage)
+
+
+def kept_stages(run_folder: Path) -> list[int]:
+    """The stages after which the installation run in ``run_folder`` kept its state (sorted)."""
+    states = run_folder / "states"
+    if not states.is_dir():
+        return []
+    return sorted(int(p.name) for p in states.iterdir() if p.name.isdigit())
+
+
+def installed_state(
+    comm: MPI.Comm, case: InstallationCase, run_folder: Path, stage: int | None = None
+) -> dict[str, Any]:
+    """The manifest of the last checkpoint of the installation run in ``run_folder`` (or of
+    the state it kept after ``stage``) (collective). ValueError where there is none, it was
+    written on another number of ranks or the run was of another case (its ``[output]`` table
+    aside)."""
+    folder = _state_folder(run_folder, stage)
     manifest = checkpoint.read_manifest(folder, comm)
     differences = [
         d
@@ -44,33 +60,45 @@ def installed_state(comm: MPI.Comm, case: InstallationCase, run_folder: Path) ->
 
 
 def restore_installed(
-    comm: MPI.Comm, case_name: str, overrides: list[str], run_folder: Path
+    comm: MPI.Comm,
+    case_name: str,
+    overrides: list[str],
+    run_folder: Path,
+    stage: int | None = None,
 ) -> tuple[JointModel, list[Excitation], list[float]]:
-    """The joint restored from the last checkpoint of the installation run in ``run_folder``,
-    that run's excitations and natural frequencies [Hz] (collective)."""
+    """The joint restored from the last checkpoint of the installation run in ``run_folder`` (or
+    from the state it kept after ``stage``), that run's excitations and natural frequencies
+    [Hz] (collective)."""
     case = InstallationCase.from_dict(read_case(case_name, overrides))
-    manifest = installed_state(comm, case, run_folder)
+    manifest = installed_state(comm, case, run_folder, stage)
     model = set_up_joint_model(comm, case)
-    checkpoint.restore(run_folder / "checkpoint", model.problem)
+    checkpoint.restore(_state_folder(run_folder, stage), model.problem)
     excitations = [Excitation(**e) for e in manifest["excitations"]]
     return model, excitations, manifest["natural_frequencies_Hz"]
 
 
 def installed_modes(
-    comm: MPI.Comm, case_name: str, overrides: list[str], folder: Path, run_folder: Path
+    comm: MPI.Comm,
+    case_name: str,
+    overrides: list[str],
+    folder: Path,
+    run_folder: Path,
+    stage: int | None = None,
 ) -> dict[str, Any]:
-    """The natural frequencies [Hz] of the joint in the installed state of ``run_folder`` and
-    of the joint with a bonded band as high as its contact. Returns (and keeps in
-    ``folder``/run.json) them with the state's time [s], settlement [mm] and contact height
-    [m], and the wall time [s] (collective)."""
+    """The natural frequencies [Hz] of the joint in the installed state of ``run_folder`` (or
+    in the state it kept after ``stage``) and of the joint with a bonded band as high as its
+    contact. Returns (and keeps in ``folder``/run.json) them with the state's time [s],
+    settlement [mm] and contact height [m], and the wall time [s] (collective)."""
     path = folder / "run.json"
     request = {"case": case_name, "overrides": overrides, "installed": str(run_folder)}
+    if stage is not None:
+        request["stage"] = stage
     if path.exists():
         kept = json.loads(path.read_text())
         if kept["request"] == request:
             return kept
     wall = time.perf_counter()
-    model, _, _ = restore_installed(comm, case_name, overrides, run_folder)
+    model, _, _ = restore_installed(comm, case_name, overrides, run_folder, stage)
     case, problem = model.case, model.problem
     frequencies = settled_modes(model, N_MODES)[0].frequencies_hz
     height = contact_height(model)

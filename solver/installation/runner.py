@@ -113,10 +113,17 @@ class Installation:
             "natural_frequencies_Hz": self.natural_frequencies,
         }
 
+    def stage_state_dir(self, stage: int) -> Path:
+        """Where ``[output] stage_states`` keeps the state after stage ``stage`` (0: self-weight)."""
+        return self.output / "states" / str(stage)
+
     def _checkpoint(self, next_stage: int, chunk: int) -> None:
         # a resumed run starts with a fresh factorisation, so does the uninterrupted one
         self.model.problem.reset_operator()
-        checkpoint.save(self.checkpoint_dir, self.model.problem, self._record(next_stage, chunk))
+        record = self._record(next_stage, chunk)
+        checkpoint.save(self.checkpoint_dir, self.model.problem, record)
+        if chunk == 0 and self.case.output.stage_states:
+            checkpoint.save(self.stage_state_dir(next_stage - 1), self.model.problem, record)
         self._checkpoints += 1
         if self._stop_after is not None and self._checkpoints >= self._stop_after:
             raise _Stopped()

@@ -242,6 +242,9 @@ class OutputSettings:
     """``[output]``: checkpoints, ParaView files, plots, stick-slip detection."""
 
     checkpoint_every: int = 100  #: steps between checkpoints (and at every stage end)
+    #: also keep the state at the end of every stage in states/<k> (k = 0: self-weight), e.g.
+    #: for the natural frequencies after each stage (benchmarks/scenarios.py, S8)
+    stage_states: bool = False
     paraview: bool = True
     plots: bool = True
     slip_rate_mm_s: float = (
@@ -249,6 +252,8 @@ class OutputSettings:
     )
 
     def __post_init__(self) -> None:
+        if not isinstance(self.stage_states, bool):
+            raise ValueError(f"stage_states must be true or false, got {self.stage_states!r}")
         if not (isinstance(self.checkpoint_every, int) and self.checkpoint_every >= 1):
             raise ValueError(
                 f"checkpoint_every must be an integer >= 1, got {self.checkpoint_every!r}"

@@ -75,9 +75,10 @@ def test_atlas_runs_scenarios_and_rebuilds_its_page(atlas_output):
 
 @pytest.fixture(scope="module")
 def installed(tiny_case, shared_dir):
-    """The output folder of an installation run of the tiny joint."""
+    """The output folder of an installation run of the tiny joint, with its stage states."""
     out = shared_dir("installed")
-    Installation(MPI.COMM_WORLD, tiny_case(), out, progress=False).run()
+    case = tiny_case("output.stage_states=true")
+    Installation(MPI.COMM_WORLD, case, out, progress=False).run()
     return out
 
 
@@ -102,6 +103,15 @@ def test_s2_s4_s5_s8_from_the_installed_state(installed, atlas_output, tiny_case
     assert modes["time_s"] == pytest.approx(manifest["time_s"])
     assert len(modes["frequencies_Hz"]) == len(modes["bonded_Hz"]) == 10
     assert f"(t = {manifest['time_s']:.2f} s) against the end of self-weight" in text
+    # S8 after each vibration stage: the last stage's kept state is the installed state
+    last = json.loads((out / "runs" / "modes_stage_2" / "run.json").read_text())
+    assert last["time_s"] == pytest.approx(manifest["time_s"])
+    assert last["frequencies_Hz"] == pytest.approx(modes["frequencies_Hz"], rel=1e-6)
+    first = json.loads((out / "runs" / "modes_stage_1" / "run.json").read_text())
+    assert first["time_s"] == pytest.approx(manifest["stages"][1]["end_s"])
+    s8 = text.split("| S8: stiffening")[1]
+    for m in (first, last):
+        assert f"({m['settlement_mm']:.3f} mm): " in s8.split("against those before it")[1]
     s2 = text.split("| S2: reference sequence")[1].split("| S4:")[0]
     vibration = [s for s in manifest["stages"] if s["stage"] >= 1]
     assert len(vibration) == 2  # the tiny case's sequence: one mode and the control

@@ -55,6 +55,7 @@ def test_presets_are_valid_installation_cases():
         ("contact.candidate_gap=-1e-6", ["candidate_gap"]),
         ("contact.quadrature_degree=-1", ["quadrature_degree"]),
         ("output.checkpoint_every=0", ["checkpoint_every"]),
+        ("output.stage_states=1", ["stage_states", "true or false"]),
         ("mesh.n_circumferential=10", ["n_circumferential", "multiple of 4"]),
         ("loading.force=1", ["unknown table", "loading"]),
     ],
