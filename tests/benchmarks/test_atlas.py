@@ -7,6 +7,7 @@ physics; docs/scenarios.md has the converged joint's.)"""
 
 import csv
 import json
+import shutil
 
 import pytest
 from mpi4py import MPI
@@ -194,6 +195,24 @@ def test_s3_from_the_installed_state(installed, atlas_output):
     assert f"at {drive:.2f} Hz (not at a natural frequency)" in s3
     assert "threshold between" in s3 or "not bracketed" in s3
     assert (atlas_output / "figures" / "scenarios" / f"S3_amplitude_{drive:.0f}Hz.png").exists()
+
+
+def test_s8_says_when_the_run_kept_no_stage_states(installed, shared_dir):
+    """S8 from a run without stage states: its installed state only, and a "not run" row."""
+    bare = shared_dir("installed_bare")
+    if MPI.COMM_WORLD.rank == 0:
+        shutil.copytree(
+            installed, bare, ignore=shutil.ignore_patterns("states"), dirs_exist_ok=True
+        )
+    MPI.COMM_WORLD.Barrier()
+    out = shared_dir("atlas_bare")
+    argv = ["S8", "--case", "tiny", "--output", str(out), "--docs", str(out / "page.md")]
+    assert main([*argv, "--installed", str(bare)]) == 0
+    MPI.COMM_WORLD.Barrier()
+    s8 = (out / "page.md").read_text().split("| S8: stiffening")[1]
+    assert "kept no stage states (`--set output.stage_states=true`) | not run |" in s8
+    assert "against the end of self-weight" in s8  # the installed state's rows
+    assert not (out / "runs" / "modes_stage_1").exists()
 
 
 def test_installed_state_of_another_case_is_refused(installed, shared_dir, capsys):
