@@ -118,12 +118,13 @@ class Installation:
         return self.output / "states" / str(stage)
 
     def _checkpoint(self, next_stage: int, chunk: int) -> None:
+        problem = self.model.problem
         # a resumed run starts with a fresh factorisation, so does the uninterrupted one
-        self.model.problem.reset_operator()
+        problem.reset_operator()
         record = self._record(next_stage, chunk)
-        checkpoint.save(self.checkpoint_dir, self.model.problem, record)
+        checkpoint.save(self.checkpoint_dir, problem, record)
         if chunk == 0 and self.case.output.stage_states:
-            checkpoint.save(self.stage_state_dir(next_stage - 1), self.model.problem, record)
+            checkpoint.save(self.stage_state_dir(next_stage - 1), problem, record)
         self._checkpoints += 1
         if self._stop_after is not None and self._checkpoints >= self._stop_after:
             raise _Stopped()
