@@ -73,6 +73,13 @@ def settle(comm: MPI.Comm, overrides: list[str], case_name: str = "coarse") -> S
     model = set_up_joint_model(comm, case)
     sw = case.self_weight
     run(model.problem, sw.duration_s, sw.dt_s, progress=False)
+    return choose(model)
+
+
+def choose(model: JointModel) -> SettledJoint:
+    """The modes of the joint in its present state (``vibration.n_modes``) and f_r and f_c
+    chosen from them as the installation run does (collective)."""
+    case = model.case
     result, _ = settled_modes(model, case.vibration.n_modes)
     parts = JointParts.for_joint(model.V, model.mesh_data, model.placed)
     records = describe_modes(

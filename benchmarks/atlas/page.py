@@ -31,6 +31,12 @@ stages' wall times) counts in S2 only (docs/install.md, "Cost"). A verdict is "r
 or "not reproduced" where the criterion is a test, "measured" where it is a figure to report,
 "not run" where the run it needs was not made.
 Wall times are on {ranks} MPI rank(s) of the machine that ran it.
+
+Shortened, S1, the friction half of S6 and S8 run in the test suite (`make test`,
+`tests/solver/installation/test_install_scenarios.py`, serial and on 2 ranks) on the default
+joint with an 80 mm contact zone and the self-weight ramped over 1 s (`cases/suite.toml`);
+the two-stage S2 (from the end of that ramp a lead-in, then one mode and the control, 0.05 s
+each) is there too, marked `slow` (about 7 min more on 2 ranks: `pytest --slow`).
 """
 
 

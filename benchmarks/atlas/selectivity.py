@@ -17,14 +17,20 @@ from typing import Any
 from mpi4py import MPI
 
 from benchmarks.atlas.stepping import joint_state, run_schedule
-from benchmarks.branches import settle
+from benchmarks.branches import SettledJoint, settle
 from solver.dynamics.loads import Schedule, Stage
 from solver.installation import checkpoint
 from solver.installation.model import JointModel
 from solver.installation.planning import compensate, stage_step
 from solver.post import report
 
-__all__ = ["selectivity_ratio", "selectivity_runs", "sustained_rate", "whole_periods"]
+__all__ = [
+    "selectivity_branches",
+    "selectivity_ratio",
+    "selectivity_runs",
+    "sustained_rate",
+    "whole_periods",
+]
 
 
 def sustained_rate(rows: list) -> float:
@@ -81,7 +87,24 @@ def selectivity_runs(
         if kept["request"] == request:
             return kept
     wall = time.perf_counter()
-    joint = settle(comm, overrides, case_name)
+    result = {
+        "request": request,
+        **selectivity_branches(settle(comm, overrides, case_name), folder, lead_in_s, duration_s),
+    }
+    result["wall_s"] = time.perf_counter() - wall
+    if comm.rank == 0:
+        path.write_text(json.dumps(result))
+    return result
+
+
+def selectivity_branches(
+    joint: SettledJoint, folder: Path, lead_in_s: float, duration_s: float
+) -> dict[str, Any]:
+    """From the settled ``joint``: the lead-in of ``lead_in_s`` [s] at the control frequency,
+    then the control and the best mode for ``duration_s`` [s] each (to whole periods of the
+    control and of the mode's natural frequency); the lead-in's state is kept in ``folder``.
+    Returns the settled state, per branch (lead-in, control, modal) its rows and frequencies
+    [Hz], the natural frequencies [Hz] and the amplitude [N] (collective)."""
     model = joint.model
     case, problem = model.case, model.problem
     t0, s0, n0 = joint_state(model)
@@ -112,15 +135,10 @@ def selectivity_runs(
         "m": best.m,
         "n": best.n,
     }
-    result = {
-        "request": request,
+    return {
         "name": folder.name,
         "settled": {"time_s": t0, "settlement_mm": s0, "normal_N": n0},
         "natural_Hz": [float(f) for f in joint.frequencies_hz],
         "amplitude_N": amplitude,
         "branches": branches,
-        "wall_s": time.perf_counter() - wall,
     }
-    if comm.rank == 0:
-        path.write_text(json.dumps(result))
-    return result

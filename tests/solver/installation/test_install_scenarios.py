@@ -1,9 +1,11 @@
-"""docs/physics.md §5 observations reproduced by the joint model: scenario tests on a coarse joint.
+"""docs/physics.md §5 observations reproduced by the joint model: the atlas's S1, the friction half
+of S6 and S8 (docs/scenarios.md), shortened, on the default joint.
 
-cases/scenario.toml: the coarse joint of cases/coarse.toml (8 elements around, 0.25 m axially,
-10 mm axially in the contact zone, P2) with the self-weight of 10 kN ramped over 1 s (half the
-§3 ramp time) in 10 ms steps, which resolve the TP's axial oscillation on the wedge (about
-24 Hz) so that the TP moves in stick-slip steps rather than sliding steadily.
+cases/suite.toml: the joint and contact solver of the default run (cases/scaled.toml: 48
+elements around, 80 mm axially, 10 mm axially in the contact zone, P2, its ten lowest
+frequencies within 3 % of the converged ones) with an 80 mm contact zone and the self-weight of
+10 kN ramped over 1 s (half the §3 ramp time) in 10 ms steps, which resolve the TP's axial
+oscillation on the wedge so that the TP moves in stick-slip steps rather than sliding steadily.
 
 * §5.1: under the slowly increasing axial load the TP settles in stick-slip steps: several
   stick -> slip transitions of the TP as a whole (solver.post.report.stick_slip_events), with
@@ -13,32 +15,45 @@ cases/scenario.toml: the coarse joint of cases/coarse.toml (8 elements around, 0
 * §5.8: the natural frequencies of the settled joint (contact tangent of the current contact
   set, solver.installation.model.settled_modes) rise with settlement: the lowest modes at the
   end of the ramp lie above those at half the load.
+* §5.2 (the atlas's S2 in its two-stage form, benchmarks/atlas/selectivity.py): from the
+  settled joint, a lead-in at the control frequency, then the control and the best-ranked mode
+  for the same time each; the mode settles at least 5 times as fast over its second half.
+  About 7 min on 2 ranks after the ramp (three stages of 0.05 s, each with its own set-up of
+  the contact solver): marked ``slow``.
 
-The vibration scenarios are test_install_vibration.py (§5.2, 5.3, 5.6) and
-test_install_dismount.py (§5.5, 5.7); docs/install.md reports their measured outcome.
+The scenarios on the coarse joint (8 around, which locks) are test_install_vibration.py
+(§5.2, 5.3, 5.6) and test_install_dismount.py (§5.5, 5.7); docs/install.md reports their
+measured outcome.
 """
+
+from typing import NamedTuple
 
 import numpy as np
 import pytest
 from mpi4py import MPI
 
+from benchmarks.atlas.selectivity import selectivity_branches, selectivity_ratio
+from benchmarks.branches import SettledJoint, choose
 from common.case import read_case
 from solver.dynamics.time_loop import run
 from solver.installation.case import InstallationCase
-from solver.installation.model import set_up_joint_model, settled_modes
-from solver.post.report import stick_slip_events
+from solver.installation.model import JointModel, set_up_joint_model, settled_modes
+from solver.post.report import SELECTIVE, stick_slip_events
 
 pytestmark = pytest.mark.mpi
 
 LOW_FRICTION = ["friction.mu_s=0.0625", "friction.mu_d=0.05"]
 N_MODES = 6
+LEAD_IN = BRANCH = 0.05  #: the two-stage S2's lead-in and branches [s]
 
 
-def _self_weight(overrides: list[str], modes_at: tuple[float, ...] = (), end: float = 1.0):
+def _self_weight(
+    overrides: list[str], modes_at: tuple[float, ...] = (), end: float = 1.0
+) -> tuple[np.ndarray, list[np.ndarray], JointModel]:
     """Run the self-weight ramp up to ``end`` (fraction of the ramp); return the history
-    (time [s], settlement [mm]) and the settled joint's frequencies [Hz] at the times
-    ``modes_at`` (fractions of the ramp)."""
-    case = InstallationCase.from_dict(read_case("scenario", overrides))
+    (time [s], settlement [mm]), the settled joint's N_MODES lowest frequencies [Hz] at the
+    times ``modes_at`` (fractions of the ramp) and the joint."""
+    case = InstallationCase.from_dict(read_case("suite", overrides))
     model = set_up_joint_model(MPI.COMM_WORLD, case)
     sw = case.self_weight
     history = []
@@ -52,17 +67,23 @@ def _self_weight(overrides: list[str], modes_at: tuple[float, ...] = (), end: fl
         run(model.problem, fraction * sw.duration_s, sw.dt_s, observers=[observe], progress=False)
         if fraction in modes_at:
             frequencies.append(settled_modes(model, N_MODES)[0].frequencies_hz)
-    return np.array(history), frequencies
+    return np.array(history), frequencies, model
+
+
+class Reference(NamedTuple):
+    history: np.ndarray  #: (time [s], settlement [mm]) rows of the ramp
+    half_load: np.ndarray  #: the N_MODES lowest frequencies at half the load [Hz]
+    settled: SettledJoint  #: at the end of the ramp, its modes and the frequency choice
 
 
 @pytest.fixture(scope="module")
-def reference():
-    return _self_weight([], modes_at=(0.5, 1.0))
+def reference() -> Reference:
+    history, (half_load,), model = _self_weight([], modes_at=(0.5,))
+    return Reference(history, half_load, choose(model))
 
 
 def test_stick_slip_settlement_under_slowly_increasing_load(reference):
-    (history, _) = reference
-    t, s = history.T
+    t, s = reference.history.T
     events = stick_slip_events(t, s, 0.0, 0.0, 1, slip_rate_mm_s=1.0)
     rate = np.diff(np.r_[0.0, s]) / np.diff(np.r_[0.0, t])
     at_rest = np.mean(np.abs(rate[t > 0.2]) < 0.1)  # mm/s, after the landing
@@ -79,10 +100,9 @@ def test_stick_slip_settlement_under_slowly_increasing_load(reference):
 def test_lower_friction_settles_more(reference):
     """Up to a quarter of the ramp (2.5 kN): with mu = 0.0625/0.05 the TP slides on until the
     wedge alone nearly carries the load, so it settles several times more."""
-    (history, _) = reference
-    low, _ = _self_weight(LOW_FRICTION, end=0.25)
+    low, _, _ = _self_weight(LOW_FRICTION, end=0.25)
     t, s_low = low[-1]
-    s_ref = np.interp(t, *history.T)
+    s_ref = np.interp(t, *reference.history.T)
     print(
         f"\nsettlement at {t:.2f} s (2.5 kN): mu 0.5/0.4 {s_ref:.3f} mm, mu 0.0625/0.05 {s_low:.3f} mm"
     )
@@ -93,6 +113,19 @@ def test_lower_friction_settles_more(reference):
 def test_natural_frequencies_rise_with_settlement(reference):
     """Modes of the settled joint at 5 kN and at 10 kN (contact set tied): the contact band
     grows with settlement, so every one of the lowest modes stiffens."""
-    (_, (f_half, f_end)) = reference
+    f_half, f_end = reference.half_load, reference.settled.frequencies_hz[:N_MODES]
     print(f"\nfrequencies [Hz] at 5 kN {np.round(f_half, 2)}, at 10 kN {np.round(f_end, 2)}")
     assert np.all(f_end > f_half)
+
+
+@pytest.mark.slow  # about 7 min on 2 ranks after the ramp (module docstring): pytest --slow
+def test_modal_stage_settles_faster_than_the_control(reference, shared_dir):
+    """The two-stage S2 from the end of the ramp: lead-in, control and mode at 3.6 kN."""
+    r = selectivity_branches(reference.settled, shared_dir("selectivity"), LEAD_IN, BRANCH)
+    modal, control = r["branches"]["modal"], r["branches"]["control"]
+    ratio = selectivity_ratio(modal["rows"], control["rows"])
+    print(
+        f"\nmode {modal['frequency_Hz']:.2f} Hz (driven at {modal['forcing_Hz']:.2f} Hz) against "
+        f"the control {control['frequency_Hz']:.2f} Hz: {ratio:.1f} x over the second half"
+    )
+    assert ratio >= SELECTIVE
