@@ -9,14 +9,13 @@ moves up) and whether it separated (contact normal force -> 0). Outputs in --out
 dismount.csv, dismount.png, and everything of the installation run (history.csv, stages.csv,
 modes.csv, frequencies.csv, plots, summary.txt).
 
-Without options: cases/dismount.toml (the coarse frictional joint, 8 around, 0.25 m, with the
-contact settings with which the frictional Newton solve converges; its shell modes lock,
-docs/install.md "Discretisation", so ranked frequencies up to 700 Hz; the atlas's S5 dismounts
-the converged joint), short stages. After the self-weight stage
-alone this joint is held by a contact normal force of
-about 19 kN, so its rigid Coulomb pull-out force N (mu cos(alpha) - sin(alpha)) is 7.4-9.4 kN
-(printed): the default pull of 6 kN lies below it, a pull in docs/physics.md §3's rig range (10-40 kN,
-e.g. --pull 20e3) frees this joint without vibration. --quick: --case dismount_quick (the tiny
+Without options: cases/dismount.toml (the default joint of cases/scaled.toml, 48 around, P2,
+whose ten lowest frequencies are within 3 % of the converged ones: docs/install.md
+"Discretisation"), short stages. After the self-weight stage alone this joint is held by a
+contact normal force of about 21 kN, so its rigid Coulomb pull-out force
+N (mu cos(alpha) - sin(alpha)) is 7.9-10.0 kN (printed; docs/scenarios.md, S5): the default
+pull of 6 kN lies below it, a pull in docs/physics.md §3's rig range (10-40 kN, e.g. --pull
+20e3) frees this joint without vibration. --quick: --case dismount_quick (the tiny
 joint with the landing contact settings) and very short stages (a smoke run: the TP is still
 sliding at the end of its 12 ms self-weight ramp, so little normal force has built up and the
 pull alone separates it).

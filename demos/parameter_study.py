@@ -8,8 +8,8 @@ stage at the best-ranked natural frequency and one at the non-modal control freq
 into its own sub-folder of --output. Written as the study goes: summary.csv (settlement per
 stage per variant, mm) and summary.png (settlement gained per stage and variant).
 
-Without options: cases/parameter_study.toml (the coarse frictional joint, 8 around,
-0.25 m, whose shell modes lock: docs/install.md "Discretisation"; about 10 minutes per variant on 2 cores).
+Without options: cases/parameter_study.toml (the default joint of cases/scaled.toml, 48
+around, P2, within 3 % of the converged frequencies: docs/install.md "Discretisation").
 --quick: --case parameter_study_quick (the tiny joint with the landing contact settings, a
 12 ms self-weight ramp and one 2 ms stage at 100 Hz, eccentric amplitude, without the modal
 stage) for every variant (a smoke run, not physics).

@@ -12,9 +12,9 @@ Outputs in --output: sweep.csv (time_s, frequency_Hz, amplitude_N, settlement_mm
 settlement_gain_mm), sweep.png (settlement gained against time and against frequency), and
 the installation outputs (history.csv, stages.csv with the gain per step, modes.csv, ...).
 
-Without options: cases/sweep.toml (the coarse frictional joint, 8 around, 0.25 m, whose shell
-modes lock: docs/install.md "Discretisation"; 20 modes; the atlas's S7 sweeps the converged
-joint) and steps of 0.03 s (the published tests' 0.5 s steps: --dwell 0.5, about 16 x longer).
+Without options: cases/sweep.toml (the default joint of cases/scaled.toml, 48 around, P2,
+within 3 % of the converged frequencies: docs/install.md "Discretisation"; 20 modes) and
+steps of 0.03 s (the published tests' 0.5 s steps: --dwell 0.5, about 16 x longer).
 --quick: --case quick (the demos' smoke-run joint) and three 2 ms steps (not physics).
 
 Usage: mpirun -n 2 python demos/sweep.py [--sweep steps|ramp] [--f-start HZ] [--f-stop HZ]
