@@ -20,10 +20,11 @@ gained in each branch [mm] and the docs/physics.md §5 criteria: frequency-drive
 (docs/physics.md §5.2), amplitude-driven (c) > 5 (b) (5.3), stabilisation of each event: the last 20 %
 of a stage adds less than 5 % of its gain (5.2).
 
-    mpirun -n 2 python benchmarks/branches.py                       # cases/coarse.toml (as demos/install.py)
+    mpirun -n 2 python benchmarks/branches.py                       # cases/coarse.toml
     python benchmarks/branches.py --set mesh.n_circumferential=16 --duration 0.1
 
-The functions are shared with tests/solver/installation/test_install_vibration.py.
+The functions are shared with tests/solver/installation/test_install_vibration.py,
+tests/solver/installation/test_install_scenarios.py (``choose``) and benchmarks/atlas/.
 """
 
 import argparse

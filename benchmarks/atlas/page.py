@@ -36,7 +36,8 @@ Shortened, S1, the friction half of S6 and S8 run in the test suite (`make test`
 `tests/solver/installation/test_install_scenarios.py`, serial and on 2 ranks) on the default
 joint with an 80 mm contact zone and the self-weight ramped over 1 s (`cases/suite.toml`);
 the two-stage S2 (from the end of that ramp a lead-in, then one mode and the control, 0.05 s
-each) is there too, marked `slow` (about 7 min more on 2 ranks: `pytest --slow`).
+each) is there too, marked `slow` (7.1 min more on 2 ranks:
+`mpirun -n 2 python -m mpi4py -m pytest -s --slow --durations=0 tests/solver/installation/test_install_scenarios.py`).
 """
 
 

@@ -18,8 +18,12 @@ oscillation on the wedge so that the TP moves in stick-slip steps rather than sl
 * §5.2 (the atlas's S2 in its two-stage form, benchmarks/atlas/selectivity.py): from the
   settled joint, a lead-in at the control frequency, then the control and the best-ranked mode
   for the same time each; the mode settles at least 5 times as fast over its second half.
-  About 7 min on 2 ranks after the ramp (three stages of 0.05 s, each with its own set-up of
-  the contact solver): marked ``slow``.
+  7.1 min on 2 ranks after the ramp (three stages of 0.05 s, each with its own set-up of the
+  contact solver; ``mpirun -n 2 python -m mpi4py -m pytest -s --slow --durations=0`` on this
+  file): marked ``slow``.
+
+The fixture's end-of-ramp modal analysis is the installation run's (``benchmarks.branches.choose``:
+the case's 20 modes and the frequency choice), so that the two-stage S2 starts from it.
 
 The scenarios on the coarse joint (8 around, which locks) are test_install_vibration.py
 (§5.2, 5.3, 5.6) and test_install_dismount.py (§5.5, 5.7); docs/install.md reports their
@@ -118,7 +122,7 @@ def test_natural_frequencies_rise_with_settlement(reference):
     assert np.all(f_end > f_half)
 
 
-@pytest.mark.slow  # about 7 min on 2 ranks after the ramp (module docstring): pytest --slow
+@pytest.mark.slow  # 7.1 min on 2 ranks after the ramp (module docstring): pytest --slow
 def test_modal_stage_settles_faster_than_the_control(reference, shared_dir):
     """The two-stage S2 from the end of the ramp: lead-in, control and mode at 3.6 kN."""
     r = selectivity_branches(reference.settled, shared_dir("selectivity"), LEAD_IN, BRANCH)

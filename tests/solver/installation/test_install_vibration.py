@@ -1,7 +1,7 @@
 """docs/physics.md §5.2, 5.3 and 5.6 on the coarse joint: frequency- and amplitude-driven
 settlement, stabilisation, and the friction decay d_c.
 
-The joint and self-weight stage of test_install_scenarios.py (cases/scenario.toml), then, with
+The coarse joint under a 1 s self-weight ramp in 10 ms steps (cases/scenario.toml), then, with
 the functions of benchmarks/branches.py: the modal stage chooses the best-ranked natural
 frequency f_r and a non-modal control f_c; a lead-in of LEAD_IN at f_c with A = 3.6 kN; from
 that state (solver.installation.checkpoint) three branches of BRANCH each: (a) f_r at A,
