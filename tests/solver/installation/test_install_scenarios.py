@@ -17,10 +17,10 @@ oscillation on the wedge so that the TP moves in stick-slip steps rather than sl
   end of the ramp lie above those at half the load.
 * §5.2 (the atlas's S2 in its two-stage form, benchmarks/atlas/selectivity.py): from the
   settled joint, a lead-in at the control frequency, then the control and the best-ranked mode
-  for the same time each; the mode settles at least 5 times as fast over its second half.
-  7.1 min on 2 ranks after the ramp (three stages of 0.05 s, each with its own set-up of the
-  contact solver; ``mpirun -n 2 python -m mpi4py -m pytest -s --slow --durations=0`` on this
-  file): marked ``slow``.
+  for the same time each; the mode settles at least 5 times as fast over its second half
+  (three stages of 0.05 s, each with its own set-up of the contact solver: the file's most
+  costly test; ``mpirun -n 2 python -m mpi4py -m pytest -s --durations=0`` on this file prints
+  the times).
 
 The fixture's end-of-ramp modal analysis is the installation run's (``benchmarks.branches.choose``:
 the case's 20 modes and the frequency choice), so that the two-stage S2 starts from it.
@@ -122,7 +122,6 @@ def test_natural_frequencies_rise_with_settlement(reference):
     assert np.all(f_end > f_half)
 
 
-@pytest.mark.slow  # 7.1 min on 2 ranks after the ramp (module docstring): pytest --slow
 def test_modal_stage_settles_faster_than_the_control(reference, shared_dir):
     """The two-stage S2 from the end of the ramp: lead-in, control and mode at 3.6 kN."""
     r = selectivity_branches(reference.settled, shared_dir("selectivity"), LEAD_IN, BRANCH)
