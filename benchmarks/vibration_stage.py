@@ -2,7 +2,8 @@
 
 Sets up the case's joint, settles it under the self-weight stage (ramp and hold with the case's
 settings) or restores that state from ``--checkpoint`` (written there on the first run), or
-starts from the installed state of an installation run (``--installed RUN``), then
+starts from the installed state of an installation run (``--installed RUN``; with ``--stage N``
+the state that run kept after its stage N), then
 runs ``--steps`` steps of a stage at ``--frequency`` with the case's forcing, direction and
 vibration scheme and the amplitude ``--amplitude`` (N, or "eccentric": the motors' 0.3632 f^2 N).
 A restored state must have been written with the same case and overrides. Prints per step the wall time, Newton
@@ -15,6 +16,8 @@ breakdown (``benchmarks/phase_timer.py``).
         --set self_weight.rho_inf=0 --checkpoint output/settled_scaled_rho0
     mpirun -n 2 python benchmarks/vibration_stage.py --frequency 320.91 --amplitude 3600 \\
         --steps 12 --installed output/install
+    mpirun -n 2 python benchmarks/vibration_stage.py --frequency 149.63 --amplitude 3600 \\
+        --steps 240 --installed output/install --stage 3   # run with output.stage_states=true
 """
 
 import argparse
@@ -57,16 +60,25 @@ def main(argv=None) -> int:
         metavar="RUN",
         help="start from the last checkpoint of a demos/install.py run of the case instead",
     )
+    p.add_argument(
+        "--stage",
+        type=int,
+        metavar="N",
+        help="with --installed: start from the state that run kept after its stage N (a run "
+        "with --set output.stage_states=true; 0: the self-weight stage)",
+    )
     a = p.parse_args(argv)
     if not (a.frequency > 0 and a.steps > 0):
         p.error("--frequency and --steps must be positive")
+    if a.stage is not None and a.installed is None:
+        p.error("--stage needs --installed")
     amplitude = a.amplitude if a.amplitude == "eccentric" else float(a.amplitude)
     comm = MPI.COMM_WORLD
     say = print if comm.rank == 0 else (lambda *args, **kw: None)
     case = InstallationCase.from_dict(read_case(a.case, a.set))
     if a.installed is not None:
         try:
-            model = restore_installed(comm, a.case, a.set, a.installed)[0]
+            model = restore_installed(comm, a.case, a.set, a.installed, a.stage)[0]
         except (ValueError, FileNotFoundError) as err:
             p.error(str(err))
     else:
@@ -75,7 +87,10 @@ def main(argv=None) -> int:
     say(f"{a.case}: {model.n_dofs} dofs", flush=True)
     record = {"case": a.case, "overrides": a.set}
     if a.installed is not None:
-        say(f"installed state restored from {a.installed} (t = {problem.t:.3f} s)", flush=True)
+        kept = "" if a.stage is None else f", after its stage {a.stage}"
+        say(
+            f"installed state restored from {a.installed}{kept} (t = {problem.t:.3f} s)", flush=True
+        )
     elif a.checkpoint is not None and checkpoint.exists(a.checkpoint, comm):
         saved = checkpoint.read_manifest(a.checkpoint, comm)
         if {key: saved.get(key) for key in record} != record:
