@@ -15,7 +15,6 @@ solver's factors and compliance blocks (the state they start from is the same). 
 the installed state's time included, runs only the branches it lacks).
 """
 
-import json
 import math
 import time
 from pathlib import Path
@@ -25,6 +24,7 @@ import numpy as np
 from mpi4py import MPI
 
 from benchmarks.atlas.installed import restore_installed
+from benchmarks.atlas.kept import keep_run, kept_run
 from benchmarks.atlas.stepping import run_schedule
 from common.case import read_case
 from solver.dynamics.loads import Schedule, Stage
@@ -145,7 +145,6 @@ def amplitude_runs(
     settlement [mm], normal force [N]) rows of each factor k (as text; "0": the baseline), the branch that failed
     (its factor and the error) of each frequency where one did (its search stops there) and the
     wall time [s] (collective)."""
-    path = folder / "run.json"
     branches = _Branches(comm, case_name, overrides, installed)
     case = branches.case
     manifest = checkpoint.read_manifest(installed / "checkpoint", comm)
@@ -159,11 +158,9 @@ def amplitude_runs(
     }
     result: dict[str, Any] = {"request": request, "name": folder.name, "frequencies": {}}
     wall_kept = 0.0
-    if path.exists():
-        kept = json.loads(path.read_text())
-        if kept["request"] == request:
-            result["frequencies"], wall_kept = kept["frequencies"], kept["wall_s"]
-            result["failed"] = kept.get("failed", {})
+    if (kept := kept_run(folder, request)) is not None:
+        result["frequencies"], wall_kept = kept["frequencies"], kept["wall_s"]
+        result["failed"] = kept.get("failed", {})
     wall = time.perf_counter()
     excitations = [Excitation(**e) for e in manifest["excitations"]]
     steps, slip_rate = case.time.steps_per_period, case.output.slip_rate_mm_s
@@ -181,14 +178,10 @@ def amplitude_runs(
                     failed[f"{f:.6g}"] = {"factor": k, "message": str(e)}
                     break
                 result["wall_s"] = wall_kept + time.perf_counter() - wall
-                if comm.rank == 0:
-                    folder.mkdir(parents=True, exist_ok=True)
-                    path.write_text(json.dumps(result))
+                keep_run(comm, folder, result)
             if k > 0:
                 results[k] = settles(runs[f"{k:.6g}"], runs["0"], steps, slip_rate)
             k = _next_factor(results)
     result["wall_s"] = wall_kept + time.perf_counter() - wall
-    if comm.rank == 0:
-        folder.mkdir(parents=True, exist_ok=True)
-        path.write_text(json.dumps(result))
+    keep_run(comm, folder, result)
     return result

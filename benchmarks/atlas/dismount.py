@@ -14,7 +14,6 @@ first-contact position (settlement < 0) and the contact normal force is below
 with the same request reads it).
 """
 
-import json
 import time
 from pathlib import Path
 from typing import Any
@@ -23,6 +22,7 @@ import numpy as np
 from mpi4py import MPI
 
 from benchmarks.atlas.installed import restore_installed
+from benchmarks.atlas.kept import keep_run, kept_run
 from benchmarks.atlas.stepping import advance, joint_state
 from benchmarks.branches import settle
 from solver.dynamics.loads import Schedule, Stage
@@ -56,7 +56,6 @@ def dismount_runs(
     ``folder``/run.json) per branch its (time [s], settlement [mm], normal force [N]) rows and
     whether it separated, the settled state, the rigid Coulomb pull-out forces
     and the wall time [s] (collective)."""
-    path = folder / "run.json"
     request = {
         "case": case_name,
         "overrides": overrides,
@@ -66,10 +65,8 @@ def dismount_runs(
     }
     if installed is not None:
         request["installed"] = str(installed)
-    if path.exists():
-        kept = json.loads(path.read_text())
-        if kept["request"] == request:
-            return kept
+    if (kept := kept_run(folder, request)) is not None:
+        return kept
     wall = time.perf_counter()
     if installed is None:
         joint = settle(comm, overrides, case_name)
@@ -147,6 +144,5 @@ def dismount_runs(
         "branches": branches,
         "wall_s": time.perf_counter() - wall,
     }
-    if comm.rank == 0:
-        path.write_text(json.dumps(result))
+    keep_run(comm, folder, result)
     return result

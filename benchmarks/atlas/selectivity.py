@@ -9,13 +9,13 @@ control's (``solver.post.report.frequency_selectivity``'s sustained rate).
 Kept as ``run.json`` in its folder (a later call with the same request reads it).
 """
 
-import json
 import time
 from pathlib import Path
 from typing import Any
 
 from mpi4py import MPI
 
+from benchmarks.atlas.kept import keep_run, kept_run
 from benchmarks.atlas.stepping import joint_state, run_schedule
 from benchmarks.branches import SettledJoint, settle
 from solver.dynamics.loads import Schedule, Stage
@@ -75,25 +75,21 @@ def selectivity_runs(
     and of the mode's natural frequency). Returns (and keeps in ``folder``/run.json) the request,
     the settled state, per branch (lead-in, control, modal) its rows and frequencies [Hz], the
     natural frequencies [Hz] and the wall time [s] (collective)."""
-    path = folder / "run.json"
     request = {
         "case": case_name,
         "overrides": overrides,
         "lead_in_s": lead_in_s,
         "duration_s": duration_s,
     }
-    if path.exists():
-        kept = json.loads(path.read_text())
-        if kept["request"] == request:
-            return kept
+    if (kept := kept_run(folder, request)) is not None:
+        return kept
     wall = time.perf_counter()
     result = {
         "request": request,
         **selectivity_branches(settle(comm, overrides, case_name), folder, lead_in_s, duration_s),
     }
     result["wall_s"] = time.perf_counter() - wall
-    if comm.rank == 0:
-        path.write_text(json.dumps(result))
+    keep_run(comm, folder, result)
     return result
 
 

@@ -7,7 +7,6 @@ with the same case and overrides reads it instead of running again (S1's referen
 and S8's).
 """
 
-import json
 import time
 from pathlib import Path
 from typing import Any
@@ -15,6 +14,7 @@ from typing import Any
 import numpy as np
 from mpi4py import MPI
 
+from benchmarks.atlas.kept import keep_run, kept_run
 from common.case import read_case
 from solver.contact import Status
 from solver.dynamics.time_loop import run
@@ -52,17 +52,14 @@ def self_weight_run(
     (``contact_status.png``). Returns (and keeps in ``folder``/run.json) the history (time [s],
     settlement [mm]), the stick-slip events [mm], the frequencies, Newton iterations per step
     and the wall time [s] (collective)."""
-    path = folder / "run.json"
     request = {
         "case": case_name,
         "overrides": overrides,
         "modes_at_s": list(modes_at_s),
         "until_s": until_s,
     }
-    if path.exists():
-        kept = json.loads(path.read_text())
-        if kept["request"] == request:
-            return kept
+    if (kept := kept_run(folder, request)) is not None:
+        return kept
     wall = time.perf_counter()
     case = InstallationCase.from_dict(read_case(case_name, overrides))
     model = set_up_joint_model(comm, case)
@@ -118,6 +115,5 @@ def self_weight_run(
         "bonded_Hz": bonded.tolist(),
         "wall_s": time.perf_counter() - wall,
     }
-    if comm.rank == 0:
-        path.write_text(json.dumps(result))
+    keep_run(comm, folder, result)
     return result

@@ -19,7 +19,6 @@ stage the joint may still settle under the held force.
 Kept as ``run.json`` in its folder (a later call with the same request reads it).
 """
 
-import json
 import time
 from pathlib import Path
 from typing import Any
@@ -27,6 +26,7 @@ from typing import Any
 import numpy as np
 from mpi4py import MPI
 
+from benchmarks.atlas.kept import keep_run, kept_run
 from benchmarks.atlas.stepping import advance, joint_state, run_schedule
 from benchmarks.branches import settle
 from common.case import read_case
@@ -99,7 +99,6 @@ def sweep_runs(
     [Hz], the best mode (nominal and driven [Hz]), per run its (time [s], settlement [mm],
     normal force [N]) rows with its step [s] and frequencies, and the wall time [s]
     (collective)."""
-    path = folder / "run.json"
     request = {
         "case": case_name,
         "overrides": overrides,
@@ -108,10 +107,8 @@ def sweep_runs(
         "speed_up": speed_up,
         "span": span,
     }
-    if path.exists():
-        kept = json.loads(path.read_text())
-        if kept["request"] == request:
-            return kept
+    if (kept := kept_run(folder, request)) is not None:
+        return kept
     wall = time.perf_counter()
     joint = settle(comm, overrides, case_name)
     model = joint.model
@@ -167,8 +164,7 @@ def sweep_runs(
         "runs": runs,
         "wall_s": time.perf_counter() - wall,
     }
-    if comm.rank == 0:
-        path.write_text(json.dumps(result))
+    keep_run(comm, folder, result)
     return result
 
 
@@ -180,7 +176,6 @@ def unexcited_run(
     the self-weight stage's step and the vibration scheme. Returns (and keeps in
     ``folder``/run.json) the request, its (time [s], settlement [mm], normal force [N]) rows and
     the wall time [s] (collective)."""
-    path = folder / "run.json"
     steps = sweeps["runs"]["steps"]
     duration = steps["rows"][-1][0] - steps["rows"][0][0]
     request = {
@@ -189,10 +184,8 @@ def unexcited_run(
         "settled": sweeps["settled"],
         "duration_s": duration,
     }
-    if path.exists():
-        kept = json.loads(path.read_text())
-        if kept["request"] == request:
-            return kept
+    if (kept := kept_run(folder, request)) is not None:
+        return kept
     wall = time.perf_counter()
     case = InstallationCase.from_dict(read_case(case_name, overrides))
     model = set_up_joint_model(comm, case)
@@ -207,7 +200,5 @@ def unexcited_run(
         "rows": rows,
         "wall_s": time.perf_counter() - wall,
     }
-    if comm.rank == 0:
-        folder.mkdir(parents=True, exist_ok=True)
-        path.write_text(json.dumps(result))
+    keep_run(comm, folder, result)
     return result
