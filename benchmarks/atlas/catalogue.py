@@ -21,9 +21,10 @@ from benchmarks.atlas.amplitude import (
     amplitude_runs,
     settles,
 )
+from benchmarks.atlas.continuation import continued_stage
 from benchmarks.atlas.direction import direction_runs
 from benchmarks.atlas.dismount import dismount_runs
-from benchmarks.atlas.installed import installed_modes, kept_stages, installed_state
+from benchmarks.atlas.installed import installed_modes, installed_state, kept_stages, modal_table
 from benchmarks.atlas.outcome import Outcome, Row, verdict
 from benchmarks.atlas.selectivity import selectivity_ratio, selectivity_runs, sustained_rate
 from benchmarks.atlas.self_weight import self_weight_run
@@ -37,6 +38,7 @@ from benchmarks.atlas.sweeps import (
     unexcited_run,
 )
 from common.case import read_case
+from solver.dynamics.loads import eccentric_amplitude
 from solver.installation.case import InstallationCase
 from solver.installation.frequencies import Excitation
 from solver.post import report
@@ -166,7 +168,8 @@ def s2_sequence(ctx: Context) -> Outcome:
     """S2 on the reference sequence of the installation run ``ctx.installed`` (its stages up
     to its last checkpoint): per vibration stage the settlement gained, the rate over its
     second half and the share of its last 20 %; the modal stages against the control
-    (``solver.post.report``'s criteria, as in the run's summary)."""
+    (``solver.post.report``'s criteria, as in the run's summary); a probe: the best-ranked
+    mode's stage continued (``_continued_rows``)."""
     if ctx.installed is None:
         raise ValueError("S2 reads an installation run: --installed RUN")
     manifest = installed_state(ctx.comm, ctx.case(), ctx.installed)
@@ -203,6 +206,8 @@ def s2_sequence(ctx: Context) -> Outcome:
                 verdict(all(r["ratio"] >= report.SELECTIVE for r in selectivity)),
             )
         )
+    runs: dict[str, Any] = {}
+    rows += _continued_rows(ctx, stages, excitations, runs)
     planned = len(manifest["plans"]) - 1
     rows.append(
         Row(
@@ -230,9 +235,60 @@ def s2_sequence(ctx: Context) -> Outcome:
             shutil.copyfile(last, path.parent / "contact_status.png")
             names.append("contact_status.png")
     names = ctx.comm.bcast(names)
+    if "continued" in runs:
+        path, name = ctx.figure("S2", "continued.png")
+        if ctx.comm.rank == 0:
+            c = runs["continued"]
+            figures.plot_branches(
+                {f"{c['plan']['name']} continued": c["rows"]},
+                path,
+                f"S2: {c['plan']['name']} ({c['plan']['frequency_Hz']:.2f} Hz) continued",
+            )
+        names.append(name)
     wall = sum(s["wall_s"] for s in manifest["stages"])
-    runs = {"installation": {"name": f"installation run {ctx.installed.name}", "wall_s": wall}}
+    runs["installation"] = {"name": f"installation run {ctx.installed.name}", "wall_s": wall}
     return _outcome(ctx, "S2", rows, runs, names)
+
+
+def _continued_rows(
+    ctx: Context, stages: list[dict[str, Any]], excitations: list[Excitation], runs: dict
+) -> list[Row]:
+    """S2 probe: the stage at the best-ranked mode whose state the installation run kept,
+    continued for another stage duration at the same forcing (``continued_stage``): its gain
+    per fifth and its rate over its second half against the stage's (the run joins ``runs``)."""
+    kept = set(kept_stages(ctx.installed))
+    modal = [
+        (e.rank, s)
+        for s in stages
+        if (e := excitations[s["stage"] - 1]).role == "modal" and s["stage"] in kept
+    ]
+    if not modal:
+        return []
+    s = min(modal, key=lambda p: p[0])[1]
+    runs["continued"] = c = continued_stage(
+        ctx.comm,
+        ctx.case_name,
+        ctx.overrides,
+        ctx.output / "runs" / "continued",
+        ctx.installed,
+        s["stage"],
+    )
+    t, settlement = np.array(c["rows"])[:, :2].T
+    duration = t[-1] - t[0]
+    fifths = np.interp(np.linspace(t[0], t[-1], 6), t, settlement)
+    half = settlement[-1] - np.interp(t[0] + duration / 2, t, settlement)
+    return [
+        Row(
+            f"probe: {_stage_label(s, excitations[s['stage'] - 1])}, continued from the state "
+            f"it left for another {1e3 * duration:.0f} ms at the same forcing: does its event "
+            "stop? (§5.2)",
+            f"gained {1e3 * (settlement[-1] - settlement[0]):.1f} um more ("
+            + ", ".join(f"{1e3 * g:.1f}" for g in np.diff(fifths))
+            + f" um per {1e3 * duration / 5:.0f} ms), {2 * half / duration:.3f} mm/s over its "
+            f"second half against {_rate_mm_s(s):.3f} mm/s over the stage's",
+            "measured",
+        )
+    ]
 
 
 def s3_amplitude(ctx: Context) -> Outcome:
@@ -334,7 +390,8 @@ def s3_amplitude(ctx: Context) -> Outcome:
 def s4_modes(ctx: Context) -> Outcome:
     """S4 on the installation run ``ctx.installed``: the settlement rate over the second half of
     each of its modal stages (S2's, all at the modal amplitude) by the rank of the mode, whether
-    the (m, n) = (2, 1) mode is the most effective, and from the installed state, at the lowest
+    the (m, n) = (2, 1) mode is the most effective (a probe: the modal stage's indicator of
+    those modes, ``_resonant_slip_rows``), and from the installed state, at the lowest
     anti-symmetric mode, axial forcing against axial plus the case's lateral fraction
     (``benchmarks.atlas.direction``)."""
     if ctx.installed is None:
@@ -382,6 +439,7 @@ def s4_modes(ctx: Context) -> Outcome:
                 verdict((best.m, best.n) == (2, 1)),
             )
         )
+        rows += _resonant_slip_rows(ctx.installed, modal, amplitude, case.vibration.direction)
     r = direction_runs(
         ctx.comm,
         ctx.case_name,
@@ -546,6 +604,39 @@ def _plot_dismount(ctx: Context, r: dict[str, Any], file: str, title: str) -> st
             title,
         )
     return name
+
+
+def _resonant_slip_rows(
+    run_folder: Path, modal: list[tuple[float, Excitation]], amplitude_N: float, direction: str
+) -> list[Row]:
+    """S4 probe: the linear indicator the modal stage ranks the modes by (the resonant interface
+    slip, docs/modal.md, in its ``modes.csv`` for the motors' amplitude 0.3632 f^2 at the
+    eccentric point; it scales with the force) for each modal stage's mode at the stages'
+    amplitude ``amplitude_N`` [N] and at the motors' (none where the run kept no table)."""
+    table = {int(r["mode"]): r for r in modal_table(run_folder)}
+    column = "resonant_slip_lateral_um" if direction == "lateral" else "resonant_slip_axial_um"
+    parts = []
+    for _, e in modal:
+        if e.mode in table:
+            motors_N = float(eccentric_amplitude(e.frequency_Hz))
+            slip = float(table[e.mode][column])
+            parts.append(
+                f"({e.m}, {e.n}) at {e.frequency_Hz:.2f} Hz: {slip * amplitude_N / motors_N:.1f} "
+                f"um ({slip:.1f} um at {motors_N / 1e3:.2f} kN)"
+            )
+    if not parts:
+        return []
+    return [
+        Row(
+            f"probe: the modal stage's indicator for each mode, the linear resonant interface slip "
+            f"(modal force / (2 zeta omega^2) x slip per unit modal amplitude, zeta the case's "
+            "damping ratio), "
+            f"{direction} at the eccentric point, at {amplitude_N / 1e3:g} kN (and at the motors' "
+            "0.3632 f^2)",
+            "; ".join(parts),
+            "measured",
+        )
+    ]
 
 
 def s5_dismount(ctx: Context) -> Outcome:
@@ -730,10 +821,22 @@ def s8_stiffening(ctx: Context) -> Outcome:
         f"bonded band {1e3 * r['contact_height_m']:.0f} mm": bonded,
     }
     runs = {"reference": r}
+    names = []
     if ctx.installed is not None:
         stages = [k for k in kept_stages(ctx.installed) if k >= 1]
         if stages:
-            rows += _s8_stages(ctx, stages, f_end, runs, curves)
+            stage_rows, states = _s8_stages(ctx, stages, f_end, runs)
+            rows += stage_rows
+            path, name = ctx.figure("S8", "stiffening.png")
+            if ctx.comm.rank == 0:
+                figures.plot_stiffening(
+                    r["settlement_mm"][-1],
+                    f_end,
+                    states,
+                    path,
+                    "S8: natural frequencies after each vibration stage",
+                )
+            names.append(name)
         else:
             rows.append(
                 Row(
@@ -774,31 +877,46 @@ def s8_stiffening(ctx: Context) -> Outcome:
     path, name = ctx.figure("S8", "frequencies.png")
     if ctx.comm.rank == 0:
         figures.plot_frequencies(curves, path, "S8: natural frequencies of the settled joint")
-    return _outcome(ctx, "S8", rows, runs, [name])
+    return _outcome(ctx, "S8", rows, runs, [name, *names])
 
 
 def _s8_stages(
-    ctx: Context, stages: list[int], f_settled: np.ndarray, runs: dict, curves: dict
-) -> list[Row]:
+    ctx: Context, stages: list[int], f_settled: np.ndarray, runs: dict
+) -> tuple[list[Row], dict[str, tuple[list[float], list[list[float]]]]]:
     """S8 after each vibration stage whose state the installation run kept: the ten lowest
-    against those before the stage (after self-weight for the first), and against a bonded band
-    of the contact's height (rows; the frequencies join ``runs`` and ``curves``)."""
-    before, rises, against_bonded = f_settled, [], []
+    against those before the stage (after self-weight for the first), against a bonded band
+    of the contact's height and, a probe, with the joint brought to rest after each stage (the
+    static load held as long as the self-weight stage's hold) against the joint at rest before
+    it. Returns the rows and, for ``figures.plot_stiffening``, both kinds of state's
+    settlements [mm] and frequencies [Hz] (the runs join ``runs``)."""
+    rises, against_bonded, at_rest = [], [], []
+    before = rested = f_settled
     for k in stages:
-        runs[f"stage {k}"] = m = installed_modes(
-            ctx.comm,
-            ctx.case_name,
-            ctx.overrides,
-            ctx.output / "runs" / f"modes_stage_{k}",
-            ctx.installed,
-            stage=k,
+        m, r = (
+            installed_modes(
+                ctx.comm,
+                ctx.case_name,
+                ctx.overrides,
+                ctx.output / "runs" / f"modes_stage_{k}{suffix}",
+                ctx.installed,
+                stage=k,
+                rest_s=rest_s,
+            )
+            for suffix, rest_s in (("", 0.0), ("_at_rest", ctx.case().self_weight.hold_s))
         )
-        f, bonded = np.array(m["frequencies_Hz"]), np.array(m["bonded_Hz"])
+        runs[f"stage {k}"], runs[f"stage {k} at rest"] = m, r
+        f, bonded, f_rest = (
+            np.array(x) for x in (m["frequencies_Hz"], m["bonded_Hz"], r["frequencies_Hz"])
+        )
         rises.append((k, m, f / before - 1))
         against_bonded.append((k, m, f / bonded - 1))
-        curves[f"after stage {k}, {m['settlement_mm']:.3f} mm"] = f
-        before = f
-    return [
+        at_rest.append((k, r, f_rest / rested - 1))
+        before, rested = f, f_rest
+    states = {
+        label: ([m["settlement_mm"] for _, m, _ in kind], [m["frequencies_Hz"] for _, m, _ in kind])
+        for label, kind in (("as the stage left it", rises), ("brought to rest", at_rest))
+    }
+    rows = [
         Row(
             "the ten lowest after each vibration stage against those before it (§5.8)",
             "; ".join(
@@ -817,7 +935,20 @@ def _s8_stages(
             ),
             "measured",
         ),
+        Row(
+            f"probe: the same with the joint brought to rest after each stage (the shaker off, "
+            f"the static load held {1e3 * ctx.case().self_weight.hold_s:g} ms, as in the "
+            "self-weight stage's hold, with "
+            "its scheme and step), against the joint at rest before it",
+            "; ".join(
+                f"stage {k} ({m['settlement_mm']:.3f} mm, contact {1e3 * m['contact_height_m']:.0f}"
+                f" mm): {100 * r.min():+.2f} % to {100 * r.max():+.2f} %"
+                for k, m, r in at_rest
+            ),
+            "measured",
+        ),
     ]
+    return rows, states
 
 
 def s7_sweeps(ctx: Context) -> Outcome:

@@ -11,8 +11,6 @@ that a lateral force excites. The mode is driven at its time-discrete natural fr
 included, reads it).
 """
 
-import csv
-import json
 import time
 from dataclasses import asdict
 from pathlib import Path
@@ -20,7 +18,8 @@ from typing import Any
 
 from mpi4py import MPI
 
-from benchmarks.atlas.installed import restore_installed
+from benchmarks.atlas.installed import modal_table, restore_installed
+from benchmarks.atlas.kept import keep_run, kept_run
 from benchmarks.atlas.stepping import advance, joint_state
 from common.case import read_case
 from solver.dynamics.loads import Schedule, Stage
@@ -42,15 +41,11 @@ def anti_symmetric_mode(run_folder: Path, amplitude_N: float) -> Excitation | No
     """The lowest m = 1 mode of at least ``MIN_FREQUENCY_HZ`` among the modes of the modal
     stage of the installation run in ``run_folder`` (its ``modes.csv``) as a modal excitation at
     ``amplitude_N`` [N]; None where the run had no modal stage or found no such mode."""
-    path = run_folder / "modes.csv"
-    if not path.exists():
-        return None
-    with path.open() as f:
-        rows = [
-            r
-            for r in csv.DictReader(f)
-            if int(r["m"]) == 1 and float(r["frequency_Hz"]) >= MIN_FREQUENCY_HZ
-        ]
+    rows = [
+        r
+        for r in modal_table(run_folder)
+        if int(r["m"]) == 1 and float(r["frequency_Hz"]) >= MIN_FREQUENCY_HZ
+    ]
     if not rows:
         return None
     r = min(rows, key=lambda r: float(r["frequency_Hz"]))
@@ -80,7 +75,6 @@ def direction_runs(
     (None: not run) and per branch its (time [s], settlement [mm], normal force [N]) rows, the
     lateral fraction and the wall time [s] (collective). A kept run of the same request is
     returned with only the branches it lacks run."""
-    path = folder / "run.json"
     request = {
         "case": case_name,
         "overrides": overrides,
@@ -90,12 +84,10 @@ def direction_runs(
     }
     branches: dict[str, list] = {}
     wall_kept = 0.0
-    if path.exists():
-        kept = json.loads(path.read_text())
-        if kept["request"] == request:
-            if kept["mode"] is None or set(kept["branches"]) == set(BRANCHES):
-                return kept
-            branches, wall_kept = kept["branches"], kept["wall_s"]
+    if (kept := kept_run(folder, request)) is not None:
+        if kept["mode"] is None or set(kept["branches"]) == set(BRANCHES):
+            return kept
+        branches, wall_kept = kept["branches"], kept["wall_s"]
     wall = time.perf_counter()
     mode = anti_symmetric_mode(installed, amplitude_N)
     case = InstallationCase.from_dict(read_case(case_name, overrides))
@@ -136,7 +128,5 @@ def direction_runs(
         "branches": branches,
         "wall_s": wall_kept + time.perf_counter() - wall,
     }
-    if comm.rank == 0:
-        folder.mkdir(parents=True, exist_ok=True)
-        path.write_text(json.dumps(result))
+    keep_run(comm, folder, result)
     return result

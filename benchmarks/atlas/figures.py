@@ -1,11 +1,19 @@
 """Figures of the atlas (PNG, matplotlib without a display; call on rank 0)."""
 
+import itertools
 import os
 from pathlib import Path
 
 import numpy as np
 
-__all__ = ["plot_branches", "plot_frequencies", "plot_ramps", "plot_sequence", "plot_settlement"]
+__all__ = [
+    "plot_branches",
+    "plot_frequencies",
+    "plot_ramps",
+    "plot_sequence",
+    "plot_settlement",
+    "plot_stiffening",
+]
 
 
 def _pyplot():
@@ -46,12 +54,52 @@ def plot_frequencies(series: dict[str, list[float]], path: Path, title: str) -> 
     """Natural frequencies [Hz] against mode number, one marker series per state."""
     plt = _pyplot()
     fig, ax = plt.subplots(figsize=(7, 4))
-    for (label, f), marker in zip(series.items(), "os^dv<>"):
+    for (label, f), marker in zip(series.items(), itertools.cycle("os^dv<>")):
         ax.plot(np.arange(1, len(f) + 1), f, marker, ms=6, mfc="none", label=label)
     ax.set_xlabel("mode number")
     ax.set_ylabel("natural frequency [Hz]")
     ax.set_title(title)
     ax.legend(loc="upper left")
+    fig.tight_layout()
+    fig.savefig(path, dpi=120)
+    plt.close(fig)
+
+
+def plot_stiffening(
+    settled_mm: float,
+    settled_Hz: list[float],
+    states: dict[str, tuple[list[float], list[list[float]]]],
+    path: Path,
+    title: str,
+) -> None:
+    """The change [%] of each natural frequency from the joint settled by self-weight
+    (``settled_mm``, ``settled_Hz``) against the settlement [mm]: per kind of state (label ->
+    its settlements [mm] and frequencies [Hz]) one line per mode, a colour per mode number."""
+    plt = _pyplot()
+    fig, ax = plt.subplots(figsize=(8, 4.5))
+    f0 = np.asarray(settled_Hz)
+    colours = plt.get_cmap("tab10").colors
+    styles = itertools.cycle([("o", "--", "none"), ("s", "-", None)])  # marker, line, face
+    for (label, (settlement, frequencies)), (marker, line, face) in zip(states.items(), styles):
+        x = [settled_mm, *settlement]
+        change = 100 * (np.vstack([f0, *frequencies]) / f0 - 1)
+        for j in range(len(f0)):
+            ax.plot(
+                x,
+                change[:, j],
+                ls=line,
+                marker=marker,
+                mfc=face,
+                ms=4,
+                lw=0.9,
+                color=colours[j % len(colours)],
+                label=label if j == 0 else None,
+            )
+    ax.axhline(0.0, color="k", lw=0.6, ls=":")
+    ax.set_xlabel("settlement [mm]")
+    ax.set_ylabel("natural frequency change [%]")
+    ax.set_title(title)
+    ax.legend(loc="upper left", fontsize=8, title=f"modes 1 to {len(f0)}: one colour each")
     fig.tight_layout()
     fig.savefig(path, dpi=120)
     plt.close(fig)

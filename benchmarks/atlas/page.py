@@ -26,7 +26,8 @@ kept in `docs/scenarios/<scenario>.json`. With `--installed RUN` (the output fol
 of the same case on as many ranks), S2 and S4 read that run's stages (those up to its last
 checkpoint: all of them once it has finished), and S3, S4, S5 and S8 also start from the installed
 state: the run's last checkpoint, after its last completed stage; S8 also after each vibration stage whose
-state the run kept (`--set output.stage_states=true`). The installation run's own time (the sum of its
+state the run kept (`--set output.stage_states=true`), as the stage left it and brought to rest; S4
+also reads the run's modal table. The installation run's own time (the sum of its
 stages' wall times) counts in S2 only (docs/install.md, "Cost"). A verdict is "reproduced"
 or "not reproduced" where the criterion is a test, "measured" where it is a figure to report,
 "not run" where the run it needs was not made.

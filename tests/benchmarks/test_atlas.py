@@ -1,9 +1,9 @@
 """The scenario atlas (benchmarks/scenarios.py) on the tiny joint: it runs a list of scenarios,
 makes the runs they share once, and rebuilds its page from every outcome in its output folder
-and those kept beside the page;
-S2 and S4 read the stages of an installation run, S3, S4, S5 and S8 also start from its last
-checkpoint; bad requests are refused before anything runs. (The tiny joint's verdicts say nothing about the
-physics; docs/scenarios.md has the converged joint's.)"""
+and those kept beside the page; S2 and S4 read the stages of an installation run (S4 also its
+modal table), S3, S4, S5 and S8 also start from its last checkpoint (S8 also from the states it
+kept, as left and brought to rest); bad requests are refused before anything runs. (The tiny
+joint's verdicts say nothing about the physics; docs/scenarios.md has the converged joint's.)"""
 
 import csv
 import json
@@ -16,6 +16,7 @@ from benchmarks.atlas.catalogue import SCENARIOS
 from benchmarks.atlas.page import write_page
 from benchmarks.atlas.selectivity import selectivity_ratio
 from benchmarks.scenarios import main
+from solver.dynamics.loads import eccentric_amplitude
 from solver.installation.runner import Installation
 
 pytestmark = pytest.mark.mpi
@@ -113,6 +114,11 @@ def test_s2_s4_s5_s8_from_the_installed_state(installed, atlas_output, tiny_case
     s8 = text.split("| S8: stiffening")[1]
     for m in (first, last):
         assert f"({m['settlement_mm']:.3f} mm): " in s8.split("against those before it")[1]
+    # the probe: each stage's state brought to rest, the static load held as in the self-weight
+    rest = json.loads((out / "runs" / "modes_stage_1_at_rest" / "run.json").read_text())
+    assert rest["time_s"] == pytest.approx(first["time_s"] + tiny_case().self_weight.hold_s)
+    assert f"stage 1 ({rest['settlement_mm']:.3f} mm, contact " in s8.split("brought to rest")[1]
+    assert (atlas_output / "figures" / "scenarios" / "S8_stiffening.png").exists()
     s2 = text.split("| S2: reference sequence")[1].split("| S4:")[0]
     vibration = [s for s in manifest["stages"] if s["stage"] >= 1]
     assert len(vibration) == 2  # the tiny case's sequence: one mode and the control
@@ -120,6 +126,13 @@ def test_s2_s4_s5_s8_from_the_installed_state(installed, atlas_output, tiny_case
         assert f"{s['name']} at " in s2
         assert f"gained {1e3 * s['gained_mm']:.1f} um" in s2
     assert "2 of 2 vibration stages" in s2
+    continued = json.loads((out / "runs" / "continued" / "run.json").read_text())
+    stage = manifest["stages"][continued["request"]["stage"]]  # the modal stage, continued
+    assert manifest["excitations"][stage["stage"] - 1]["role"] == "modal"
+    first_row, last_row = continued["rows"][0], continued["rows"][-1]
+    assert first_row[:2] == pytest.approx([stage["end_s"], stage["settlement_end_mm"]])
+    assert last_row[0] == pytest.approx(2 * stage["end_s"] - stage["start_s"])
+    assert f"gained {1e3 * (last_row[1] - first_row[1]):.1f} um more" in s2
     assert (atlas_output / "figures" / "scenarios" / "S2_sequence.png").exists()
     direction = json.loads((out / "runs" / "direction_installed" / "run.json").read_text())
     s4 = text.split("| S4: which modes work")[1].split("| S5:")[0]
@@ -131,6 +144,11 @@ def test_s2_s4_s5_s8_from_the_installed_state(installed, atlas_output, tiny_case
     rate = 2 * stage["gained_second_half_mm"] / (stage["end_s"] - stage["start_s"])
     assert f"rank {modal['rank']}, ({modal['m']}, {modal['n']}), " in s4  # S2's modal stage
     assert f"{modal['frequency_Hz']:.2f} Hz: {rate:.3f} mm/s" in s4
+    with (installed / "modes.csv").open() as f:  # the probe: the modal stage's indicator
+        row = next(r for r in csv.DictReader(f) if int(r["mode"]) == modal["mode"])
+    slip, motors = float(row["resonant_slip_axial_um"]), eccentric_amplitude(modal["frequency_Hz"])
+    at_stage = slip * tiny_case().vibration.amplitude_N / motors  # it scales with the force
+    assert f"{at_stage:.1f} um ({slip:.1f} um at {motors / 1e3:.2f} kN)" in s4
     with (installed / "modes.csv").open() as f:  # the lowest m = 1 mode of the modal stage
         lowest = min(
             (r for r in csv.DictReader(f) if r["m"] == "1"), key=lambda r: float(r["frequency_Hz"])
