@@ -239,10 +239,16 @@ def s2_sequence(ctx: Context) -> Outcome:
         path, name = ctx.figure("S2", "continued.png")
         if ctx.comm.rank == 0:
             c = runs["continued"]
+            s0 = c["rows"][0][1]
             figures.plot_branches(
-                {f"{c['plan']['name']} continued": c["rows"]},
+                {
+                    f"{c['plan']['name']} continued": [
+                        (t, 1e3 * (s - s0), n) for t, s, n in c["rows"]
+                    ]
+                },
                 path,
                 f"S2: {c['plan']['name']} ({c['plan']['frequency_Hz']:.2f} Hz) continued",
+                ylabel="settlement gained [um]",
             )
         names.append(name)
     wall = sum(s["wall_s"] for s in manifest["stages"])
