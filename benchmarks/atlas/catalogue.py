@@ -286,12 +286,13 @@ def _continued_rows(
     return [
         Row(
             f"probe: {_stage_label(s, excitations[s['stage'] - 1])}, continued from the state "
-            f"it left for another {1e3 * duration:.0f} ms at the same forcing: does its event "
-            "stop? (§5.2)",
+            f"it left for another {1e3 * duration:.0f} ms at the same forcing (its phase "
+            "running on): does its event stop? (§5.2)",
             f"gained {1e3 * (settlement[-1] - settlement[0]):.1f} um more ("
             + ", ".join(f"{1e3 * g:.1f}" for g in np.diff(fifths))
             + f" um per {1e3 * duration / 5:.0f} ms), {2 * half / duration:.3f} mm/s over its "
-            f"second half against {_rate_mm_s(s):.3f} mm/s over the stage's",
+            f"second half against {_rate_mm_s(s):.3f} mm/s over the stage's; "
+            f"{c['step_cuts']} step cut(s)",
             "measured",
         )
     ]
@@ -620,7 +621,8 @@ def _resonant_slip_rows(
     eccentric point; it scales with the force) for each modal stage's mode at the stages'
     amplitude ``amplitude_N`` [N] and at the motors' (none where the run kept no table)."""
     table = {int(r["mode"]): r for r in modal_table(run_folder)}
-    column = "resonant_slip_lateral_um" if direction == "lateral" else "resonant_slip_axial_um"
+    part = "lateral" if direction == "lateral" else "axial"  # "both": its axial part
+    column = f"resonant_slip_{part}_um"
     parts = []
     for _, e in modal:
         if e.mode in table:
@@ -637,7 +639,7 @@ def _resonant_slip_rows(
             f"probe: the modal stage's indicator for each mode, the linear resonant interface slip "
             f"(modal force / (2 zeta omega^2) x slip per unit modal amplitude, zeta the case's "
             "damping ratio), "
-            f"{direction} at the eccentric point, at {amplitude_N / 1e3:g} kN (and at the motors' "
+            f"{part} at the eccentric point, at {amplitude_N / 1e3:g} kN (and at the motors' "
             "0.3632 f^2)",
             "; ".join(parts),
             "measured",
@@ -797,7 +799,8 @@ def s8_stiffening(ctx: Context) -> Outcome:
     """S8, self-weight half: the settled joint's frequencies at half the load and at the end of
     the stage, against a bonded band as high as the contact at the end; where ``ctx.installed``
     names an installation run of the case, also in its installed state and after each of its
-    vibration stages whose state it kept (``[output] stage_states``)."""
+    vibration stages whose state it kept (``[output] stage_states``), as the stage left it and
+    brought to rest (``_s8_stages``; figures ``frequencies.png`` and ``stiffening.png``)."""
     r = ctx.reference()
     (t_half, f_half), (t_end, f_end) = (
         (float(k), np.array(f)) for k, f in r["frequencies_Hz"].items()
@@ -877,9 +880,8 @@ def s8_stiffening(ctx: Context) -> Outcome:
                 "measured",
             ),
         ]
-        if not stages:
-            curves[f"installed, {i['time_s']:.2f} s"] = f_inst
-            curves[f"bonded band {1e3 * i['contact_height_m']:.0f} mm (installed)"] = bonded_inst
+        curves[f"installed, {i['time_s']:.2f} s"] = f_inst
+        curves[f"bonded band {1e3 * i['contact_height_m']:.0f} mm (installed)"] = bonded_inst
     path, name = ctx.figure("S8", "frequencies.png")
     if ctx.comm.rank == 0:
         figures.plot_frequencies(curves, path, "S8: natural frequencies of the settled joint")
@@ -950,7 +952,10 @@ def _s8_stages(
                 f"stage {k} ({m['settlement_mm']:.3f} mm, contact {1e3 * m['contact_height_m']:.0f}"
                 f" mm): {100 * r.min():+.2f} % to {100 * r.max():+.2f} %"
                 for k, m, r in at_rest
-            ),
+            )
+            + f"; after stage {stages[-1]} at rest against the end of self-weight: "
+            f"{100 * (rested / f_settled - 1).min():+.2f} % to "
+            f"{100 * (rested / f_settled - 1).max():+.2f} %",
             "measured",
         ),
     ]

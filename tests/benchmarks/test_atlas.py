@@ -129,10 +129,12 @@ def test_s2_s4_s5_s8_from_the_installed_state(installed, atlas_output, tiny_case
     continued = json.loads((out / "runs" / "continued" / "run.json").read_text())
     stage = manifest["stages"][continued["request"]["stage"]]  # the modal stage, continued
     assert manifest["excitations"][stage["stage"] - 1]["role"] == "modal"
+    assert continued["plan"] == manifest["plans"][stage["stage"]]  # its forcing and step
     first_row, last_row = continued["rows"][0], continued["rows"][-1]
     assert first_row[:2] == pytest.approx([stage["end_s"], stage["settlement_end_mm"]])
     assert last_row[0] == pytest.approx(2 * stage["end_s"] - stage["start_s"])
     assert f"gained {1e3 * (last_row[1] - first_row[1]):.1f} um more" in s2
+    assert f"{continued['step_cuts']} step cut(s)" in s2
     assert (atlas_output / "figures" / "scenarios" / "S2_sequence.png").exists()
     direction = json.loads((out / "runs" / "direction_installed" / "run.json").read_text())
     s4 = text.split("| S4: which modes work")[1].split("| S5:")[0]
