@@ -508,11 +508,18 @@ def s4_modes(ctx: Context) -> Outcome:
     return _outcome(ctx, "S4", rows, {"direction": r}, names)
 
 
+def _lift_rate(b: dict[str, Any]) -> float:
+    """The TP's upward speed over the second half of branch ``b`` [mm/s]."""
+    t, s, _ = np.array(b["rows"]).T
+    half = np.searchsorted(t, 0.5 * (t[0] + t[-1]))
+    return float((s[half] - s[-1]) / (t[-1] - t[half]))
+
+
 def _branch_state(b: dict[str, Any]) -> str:
     t, s, n = np.array(b["rows"]).T
     return (
-        f"after {1e3 * (t[-1] - t[0]):.0f} ms the TP {s[0] - s[-1]:+.3f} mm up, normal force "
-        f"{1e-3 * n[-1]:.2f} kN"
+        f"after {1e3 * (t[-1] - t[0]):.0f} ms the TP {s[0] - s[-1]:+.3f} mm up "
+        f"({_lift_rate(b):+.2f} mm/s over the second half), normal force {1e-3 * n[-1]:.2f} kN"
     )
 
 
@@ -558,7 +565,7 @@ def _dismount_rows(r: dict[str, Any], state: str) -> list[Row]:
         branch = b[name]
         rows.append(
             Row(
-                f"{state}: pull + {AMPLITUDE_N / 1e3:g} kN at the "
+                f"{state}: pull + {branch['amplitude_N'] / 1e3:g} kN at the "
                 f"{'best mode' if wanted else 'control'} ({branch['frequency_Hz']:.2f} Hz, "
                 f"driven at {branch['forcing_Hz']:.2f} Hz) "
                 f"{'releases' if wanted else 'does not release'}",
@@ -589,26 +596,59 @@ def _dismount_rows(r: dict[str, Any], state: str) -> list[Row]:
     return rows
 
 
+def _motors_rows(r: dict[str, Any], base: dict[str, Any], state: str) -> list[Row]:
+    """S5 probe rows: the dismount runs ``r`` with the motors' force at the best mode, made where
+    those at the atlas's amplitude (``base``) did not release; the peak upward force of both
+    against the rigid Coulomb pull-out."""
+    pull, out = base["self_weight_N"] * PULL_FACTORS[0], base["pull_out_N"]
+    forces = (
+        base["branches"]["modal"]["amplitude_N"],
+        float(eccentric_amplitude(base["branches"]["modal"]["frequency_Hz"])),
+    )
+    peaks = "; ".join(f"pull + {f / 1e3:.2f} kN: peak {(pull + f) / 1e3:.2f} kN" for f in forces)
+    rows = [
+        Row(
+            f"probe: {state}: the peak upward force of pull + vibration against the rigid "
+            "Coulomb pull-out (a quasi-static pull above it releases)",
+            f"{peaks}; pull-out {1e-3 * out['mu_d']:.2f} / {1e-3 * out['mu_s']:.2f} kN "
+            "(mu_d / mu_s)",
+            "measured",
+        )
+    ]
+    b = r["branches"]
+    if "modal" not in b:  # the pull alone released the joint: no pulled state to vibrate
+        return rows
+    parts = [
+        f"{name} ({b[name]['frequency_Hz']:.2f} Hz, driven at {b[name]['forcing_Hz']:.2f} Hz): "
+        f"{_branch_state(b[name])}; {'separated' if b[name]['separated'] else 'holds'}"
+        for name in ("modal", "control")
+    ]
+    rows.append(
+        Row(
+            f"probe: {state}: pull + the eccentric motors' force at the best mode, 0.3632 f^2 = "
+            f"{forces[1] / 1e3:.2f} kN (the experiments' exciter, docs/physics.md §3), at the "
+            "best mode and at the control with the same force: the modal branch releases, the "
+            "control does not",
+            "; ".join(parts),
+            "measured",
+        )
+    )
+    return rows
+
+
 def _plot_dismount(ctx: Context, r: dict[str, Any], file: str, title: str) -> str:
     """Figure ``file`` of S5: settlement of every branch of the dismount runs ``r``."""
     path, name = ctx.figure("S5", file)
-    b = r["branches"]
+
+    def label(key: str, branch: dict[str, Any]) -> str:
+        if key.startswith("pull"):
+            return f"{key} the self-weight force alone"
+        force, f = 1e-3 * branch["amplitude_N"], branch["frequency_Hz"]
+        return f"pull + {force:.2f} kN, {key} ({f:.1f} Hz)"
+
     if ctx.comm.rank == 0:
         figures.plot_branches(
-            {
-                **{
-                    f"{k} the self-weight force alone": v["rows"]
-                    for k, v in b.items()
-                    if k.startswith("pull")
-                },
-                **{
-                    f"pull + vibration, {k} ({b[k]['frequency_Hz']:.1f} Hz)": b[k]["rows"]
-                    for k in ("modal", "control")
-                    if k in b
-                },
-            },
-            path,
-            title,
+            {label(k, v): v["rows"] for k, v in r["branches"].items()}, path, title
         )
     return name
 
@@ -680,7 +720,29 @@ def s5_dismount(ctx: Context) -> Outcome:
             half_stage,
             ctx.installed,
         )
-        rows += _dismount_rows(r, f"installed (t = {r['settled']['time_s']:.2f} s)")
+        state = f"installed (t = {r['settled']['time_s']:.2f} s)"
+        rows += _dismount_rows(r, state)
+        held = "modal" in r["branches"] and not r["branches"]["modal"]["separated"]
+        if held:  # the probe: the force of the experiments' exciter
+            runs["installed, motors"] = motors = dismount_runs(
+                ctx.comm,
+                ctx.case_name,
+                ctx.overrides,
+                ctx.output / "runs" / "dismount_installed_motors",
+                PULL_FACTORS[:1],
+                None,
+                half_stage,
+                ctx.installed,
+            )
+            rows += _motors_rows(motors, r, state)
+            names.append(
+                _plot_dismount(
+                    ctx,
+                    motors,
+                    "dismount_motors.png",
+                    "S5: dismount from the installed joint, the motors' force",
+                )
+            )
         names.append(
             _plot_dismount(
                 ctx, r, "dismount_installed.png", "S5: dismount from the installed joint"

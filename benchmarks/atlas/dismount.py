@@ -3,7 +3,8 @@ self-weight stage (or from the last checkpoint of an installation run of the cas
 installed state), the axial force goes from the self-weight push to an upward pull over a
 ramp and is held (the pull alone), then the same pull plus the vibration amplitude at the
 best-ranked natural frequency and, from the same pulled state, at the non-modal control
-frequency, each for at most a given time.
+frequency, each for at most a given time. The amplitude is a given force or the eccentric
+motors' force at the best mode, 0.3632 f^2 N (docs/physics.md §3), at both frequencies.
 
 The frequencies are the installation run's choice (``benchmarks.branches.settle``, or the
 installation run's own), a modal
@@ -25,7 +26,7 @@ from benchmarks.atlas.installed import restore_installed
 from benchmarks.atlas.kept import keep_run, kept_run
 from benchmarks.atlas.stepping import advance, joint_state
 from benchmarks.branches import settle
-from solver.dynamics.loads import Schedule, Stage
+from solver.dynamics.loads import Schedule, Stage, eccentric_amplitude
 from solver.installation import checkpoint
 from solver.installation.dismount import pull_out_force
 from solver.installation.model import attach_vibration
@@ -44,7 +45,7 @@ def dismount_runs(
     overrides: list[str],
     folder: Path,
     pull_factors: tuple[float, ...],
-    amplitude_N: float,
+    amplitude_N: float | None,
     duration_s: float,
     installed: Path | None = None,
 ) -> dict[str, Any]:
@@ -82,6 +83,9 @@ def dismount_runs(
     control = next(e for e in chosen if e.role == "control")
     scheme, steps = case.vibration_scheme(), case.time.steps_per_period
     drives = compensate([modal, control], [duration_s] * 2, scheme, steps)
+    force_N = (
+        amplitude_N if amplitude_N is not None else float(eccentric_amplitude(modal.frequency_Hz))
+    )
 
     def separated(rows: list) -> bool:
         return rows[-1][1] < 0.0 and rows[-1][2] < SEPARATION_FRACTION * n0
@@ -113,7 +117,7 @@ def dismount_runs(
             problem.reset_operator()
             start = problem.t
             attach_vibration(
-                model, Schedule([Stage(duration_s, e.forcing_Hz, amplitude_N)], start_s=start)
+                model, Schedule([Stage(duration_s, e.forcing_Hz, force_N)], start_s=start)
             )
             problem.set_scheme(scheme)
             branch = [joint_state(model)]
@@ -128,6 +132,7 @@ def dismount_runs(
                 "separated": separated(branch),
                 "frequency_Hz": e.frequency_Hz,
                 "forcing_Hz": e.forcing_Hz,
+                "amplitude_N": force_N,
             }
             problem.set_scheme(case.self_weight_scheme())
     alpha, friction = case.joint.mp.half_angle, case.friction

@@ -12,7 +12,8 @@ import shutil
 import pytest
 from mpi4py import MPI
 
-from benchmarks.atlas.catalogue import SCENARIOS
+from benchmarks.atlas.catalogue import SCENARIOS, _motors_rows
+from benchmarks.atlas.dismount import dismount_runs
 from benchmarks.atlas.page import write_page
 from benchmarks.atlas.selectivity import selectivity_ratio
 from benchmarks.scenarios import main
@@ -167,6 +168,28 @@ def test_s2_s4_s5_s8_from_the_installed_state(installed, atlas_output, tiny_case
     assert f"{1e3 * gain['both']:.1f} um against {1e3 * gain['axial']:.1f} um" in s4
     assert f"{1e3 * gain['both reversed']:.1f} um against {1e3 * gain['axial']:.1f} um" in s4
     assert (atlas_output / "figures" / "scenarios" / "S4_direction.png").exists()
+
+
+def test_dismount_at_the_motors_force(tiny_case, shared_dir):
+    """S5's probe: with no amplitude given, the vibration branches under the pull have the
+    eccentric motors' force at the best mode, the control the same; its rows state it."""
+    friction = ["friction.mu_s=0.3", "friction.mu_d=0.3"]  # the tiny joint is frictionless
+    stage_s = tiny_case().vibration.stage_duration_s
+    folder = shared_dir("dismount_motors")
+    # half the self-weight force: the pull alone holds the joint settled by the whole of it
+    r = dismount_runs(MPI.COMM_WORLD, "tiny", friction, folder, (0.5,), None, stage_s)
+    b = r["branches"]
+    assert not b["pull 0.5 x"]["separated"]
+    motors = eccentric_amplitude(b["modal"]["frequency_Hz"])
+    assert b["modal"]["amplitude_N"] == pytest.approx(motors)
+    assert b["control"]["amplitude_N"] == b["modal"]["amplitude_N"]
+    assert b["control"]["frequency_Hz"] != b["modal"]["frequency_Hz"]
+    for branch in (b["modal"], b["control"]):  # from the pulled state
+        assert branch["rows"][0][0] == pytest.approx(r["settled"]["time_s"] + 2 * stage_s)
+    row = _motors_rows(r, r, "settled")[1]
+    assert f"0.3632 f^2 = {motors / 1e3:.2f} kN" in row.criterion
+    lift = b["modal"]["rows"][0][1] - b["modal"]["rows"][-1][1]
+    assert f"the TP {lift:+.3f} mm up" in row.measured
 
 
 @pytest.mark.slow  # about 3 min serially: three settled joints (friction, damping) and their branches
