@@ -523,8 +523,27 @@ def _branch_state(b: dict[str, Any]) -> str:
     )
 
 
-def _dismount_rows(r: dict[str, Any], state: str) -> list[Row]:
-    """The S5 rows of the dismount runs ``r`` from ``state`` (words)."""
+def _released(b: dict[str, Any], slip_rate_mm_s: float) -> bool:
+    """Whether the TP of dismount branch ``b`` ends released: separated, or above its
+    first-contact position (settlement < 0) and lifting faster than ``slip_rate_mm_s``
+    [mm/s] over the second half (a shaken TP can still strike the MP there)."""
+    return b["separated"] or (b["rows"][-1][1] < 0.0 and _lift_rate(b) > slip_rate_mm_s)
+
+
+def _release_word(b: dict[str, Any], slip_rate_mm_s: float) -> str:
+    """How dismount branch ``b`` ends, in words (``_released``)."""
+    if b["separated"]:
+        return "separated"
+    if _released(b, slip_rate_mm_s):
+        return "released: above its first-contact position and lifting"
+    if _lift_rate(b) > slip_rate_mm_s:
+        return f"holds so far: lifting, {b['rows'][-1][1]:.3f} mm below its first-contact position"
+    return "holds"
+
+
+def _dismount_rows(r: dict[str, Any], state: str, slip_rate_mm_s: float) -> list[Row]:
+    """The S5 rows of the dismount runs ``r`` from ``state`` (words); a branch releases by
+    ``_released`` with the event threshold ``slip_rate_mm_s`` [mm/s]."""
     b, out = r["branches"], r["pull_out_N"]
     settled = (
         f"{state} {r['settled']['settlement_mm']:.3f} mm, normal force "
@@ -537,8 +556,8 @@ def _dismount_rows(r: dict[str, Any], state: str) -> list[Row]:
         Row(
             f"{state}: pull alone at the self-weight force ({1e-3 * pull:g} kN) does not "
             "release (§5.5)",
-            f"{_branch_state(first)}; {settled}",
-            verdict(not first["separated"]),
+            f"{_branch_state(first)}; {_release_word(first, slip_rate_mm_s)}; {settled}",
+            verdict(not _released(first, slip_rate_mm_s)),
         )
     ]
     for factor in PULL_FACTORS[1:]:
@@ -547,7 +566,7 @@ def _dismount_rows(r: dict[str, Any], state: str) -> list[Row]:
             Row(
                 f"{state}: pull alone at {factor:g} x the self-weight force "
                 f"({1e-3 * factor * r['self_weight_N']:g} kN)",
-                f"{_branch_state(branch)}; {'separated' if branch['separated'] else 'holds'}",
+                f"{_branch_state(branch)}; {_release_word(branch, slip_rate_mm_s)}",
                 "measured",
             )
         )
@@ -569,8 +588,8 @@ def _dismount_rows(r: dict[str, Any], state: str) -> list[Row]:
                 f"{'best mode' if wanted else 'control'} ({branch['frequency_Hz']:.2f} Hz, "
                 f"driven at {branch['forcing_Hz']:.2f} Hz) "
                 f"{'releases' if wanted else 'does not release'}",
-                f"{_branch_state(branch)}; {'separated' if branch['separated'] else 'holds'}",
-                verdict(branch["separated"] == wanted),
+                f"{_branch_state(branch)}; {_release_word(branch, slip_rate_mm_s)}",
+                verdict(_released(branch, slip_rate_mm_s) == wanted),
             )
         )
     lift = {k: b[k]["rows"][0][1] - b[k]["rows"][-1][1] for k in ("modal", "control")}
@@ -588,18 +607,23 @@ def _dismount_rows(r: dict[str, Any], state: str) -> list[Row]:
         Row(
             f"{state}: resonance-selective release: the modal branch releases, the control "
             "does not",
-            f"modal {'separated' if b['modal']['separated'] else 'holds'}, control "
-            f"{'separated' if b['control']['separated'] else 'holds'}",
-            verdict(b["modal"]["separated"] and not b["control"]["separated"]),
+            f"modal {_release_word(b['modal'], slip_rate_mm_s)}, control "
+            f"{_release_word(b['control'], slip_rate_mm_s)}",
+            verdict(
+                _released(b["modal"], slip_rate_mm_s)
+                and not _released(b["control"], slip_rate_mm_s)
+            ),
         )
     )
     return rows
 
 
-def _motors_rows(r: dict[str, Any], base: dict[str, Any], state: str) -> list[Row]:
+def _motors_rows(
+    r: dict[str, Any], base: dict[str, Any], state: str, slip_rate_mm_s: float
+) -> list[Row]:
     """S5 probe rows: the dismount runs ``r`` with the motors' force at the best mode, made where
     those at the atlas's amplitude (``base``) did not release; the peak upward force of both
-    against the rigid Coulomb pull-out."""
+    against the rigid Coulomb pull-out (``_release_word`` with ``slip_rate_mm_s`` [mm/s])."""
     pull, out = base["self_weight_N"] * PULL_FACTORS[0], base["pull_out_N"]
     forces = (
         base["branches"]["modal"]["amplitude_N"],
@@ -620,7 +644,7 @@ def _motors_rows(r: dict[str, Any], base: dict[str, Any], state: str) -> list[Ro
         return rows
     parts = [
         f"{name} ({b[name]['frequency_Hz']:.2f} Hz, driven at {b[name]['forcing_Hz']:.2f} Hz): "
-        f"{_branch_state(b[name])}; {'separated' if b[name]['separated'] else 'holds'}"
+        f"{_branch_state(b[name])}; {_release_word(b[name], slip_rate_mm_s)}"
         for name in ("modal", "control")
     ]
     rows.append(
@@ -705,7 +729,8 @@ def s5_dismount(ctx: Context) -> Outcome:
             half_stage,
         )
     }
-    rows = _dismount_rows(runs["settled"], "settled by self-weight")
+    slip_rate = ctx.case().output.slip_rate_mm_s
+    rows = _dismount_rows(runs["settled"], "settled by self-weight", slip_rate)
     names = [
         _plot_dismount(ctx, runs["settled"], "dismount.png", "S5: dismount from the settled joint")
     ]
@@ -721,8 +746,8 @@ def s5_dismount(ctx: Context) -> Outcome:
             ctx.installed,
         )
         state = f"installed (t = {r['settled']['time_s']:.2f} s)"
-        rows += _dismount_rows(r, state)
-        held = "modal" in r["branches"] and not r["branches"]["modal"]["separated"]
+        rows += _dismount_rows(r, state, slip_rate)
+        held = "modal" in r["branches"] and not _released(r["branches"]["modal"], slip_rate)
         if held:  # the probe: the force of the experiments' exciter
             runs["installed, motors"] = motors = dismount_runs(
                 ctx.comm,
@@ -734,7 +759,7 @@ def s5_dismount(ctx: Context) -> Outcome:
                 half_stage,
                 ctx.installed,
             )
-            rows += _motors_rows(motors, r, state)
+            rows += _motors_rows(motors, r, state, slip_rate)
             names.append(
                 _plot_dismount(
                     ctx,

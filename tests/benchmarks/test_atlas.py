@@ -12,7 +12,7 @@ import shutil
 import pytest
 from mpi4py import MPI
 
-from benchmarks.atlas.catalogue import SCENARIOS, _motors_rows
+from benchmarks.atlas.catalogue import SCENARIOS, _motors_rows, _released, _release_word
 from benchmarks.atlas.dismount import dismount_runs
 from benchmarks.atlas.page import write_page
 from benchmarks.atlas.selectivity import selectivity_ratio
@@ -186,10 +186,31 @@ def test_dismount_at_the_motors_force(tiny_case, shared_dir):
     assert b["control"]["frequency_Hz"] != b["modal"]["frequency_Hz"]
     for branch in (b["modal"], b["control"]):  # from the pulled state
         assert branch["rows"][0][0] == pytest.approx(r["settled"]["time_s"] + 2 * stage_s)
-    row = _motors_rows(r, r, "settled")[1]
+    row = _motors_rows(r, r, "settled", tiny_case().output.slip_rate_mm_s)[1]
     assert f"0.3632 f^2 = {motors / 1e3:.2f} kN" in row.criterion
     lift = b["modal"]["rows"][0][1] - b["modal"]["rows"][-1][1]
     assert f"the TP {lift:+.3f} mm up" in row.measured
+
+
+def test_release_of_a_dismount_branch():
+    """A branch releases when it separated, or ends above the first-contact position (settlement
+    < 0) lifting faster than the event threshold, though a shaken TP still strikes the MP."""
+
+    def branch(settlement_mm: list[float], separated: bool = False) -> dict:
+        rows = [(0.01 * k, s, 1e3) for k, s in enumerate(settlement_mm)]
+        return {"rows": rows, "separated": separated}
+
+    rate = 1.0  # mm/s
+    lifting_above = branch([0.2, 0.1, -0.05, -0.2, -0.4])  # 20 mm/s over the second half
+    assert _released(lifting_above, rate)
+    assert _release_word(lifting_above, rate).startswith("released")
+    lifting_below = branch([0.9, 0.8, 0.6, 0.4, 0.2])
+    assert not _released(lifting_below, rate)
+    assert _release_word(lifting_below, rate).startswith("holds so far")
+    resting_above = branch([-0.1, -0.1, -0.1, -0.1, -0.1])
+    assert not _released(resting_above, rate)
+    assert _release_word(resting_above, rate) == "holds"
+    assert _released(branch([0.1] * 5, separated=True), rate)
 
 
 @pytest.mark.slow  # about 3 min serially: three settled joints (friction, damping) and their branches
