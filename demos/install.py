@@ -10,8 +10,8 @@ case that would compute something else (exit code 2, naming the keys that differ
 The default case is cases/scaled.toml: the reference sequence (the 68 Hz and 100 Hz lead-in,
 then at 3.6 kN the four best-ranked natural frequencies of the settled joint up to 330 Hz, the
 (2, 1) mode and a non-modal control, 0.1 s each) on the converged joint (48 elements around,
-degree 2); --full is --case scaled_full (the ten best-ranked natural frequencies), --quick is
---case install_quick (a smoke run on a tiny joint).
+degree 2); --full is --case scaled_full (the ten best-ranked natural frequencies, a 300 mm
+contact zone), --quick is --case install_quick (a smoke run on a tiny joint).
 
 Usage: mpirun -n 2 python demos/install.py [--case scaled] [--set table.key=value ...]
        [--mu-s 0.5 --mu-d 0.4 --d-c 100] [--damping rayleigh|modal]
