@@ -1233,7 +1233,8 @@ SCENARIOS: dict[str, Scenario] = {
         "per stage the settlement gained and the sustained rate; modal stages at least 5 times "
         "the control; the last 20 % of a stage adds less than 5 % of its gain",
         s2_sequence,
-        needs="the ten best-ranked modes (the `--full` sequence, some hours): " + _VIBRATION,
+        needs="the ten best-ranked modes (the `--full` sequence, about 4 h on its 300 mm contact "
+        "zone): " + _VIBRATION,
         installed=True,
     ),
     "S3": Scenario(
@@ -1248,7 +1249,8 @@ SCENARIOS: dict[str, Scenario] = {
         "settlement rate per ranked mode at equal force; axial against axial plus 5 % lateral "
         "at an anti-symmetric mode",
         s4_modes,
-        needs="the ten best-ranked modes (the `--full` sequence, some hours): " + _VIBRATION,
+        needs="the ten best-ranked modes (the `--full` sequence, about 4 h on its 300 mm contact "
+        "zone): " + _VIBRATION,
         installed=True,
     ),
     "S5": Scenario(
