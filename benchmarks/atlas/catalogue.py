@@ -23,7 +23,7 @@ from benchmarks.atlas.amplitude import (
 )
 from benchmarks.atlas.continuation import continued_stage
 from benchmarks.atlas.direction import direction_runs
-from benchmarks.atlas.dismount import dismount_runs
+from benchmarks.atlas.dismount import dismount_runs, lift_rate, released, separated
 from benchmarks.atlas.installed import installed_modes, installed_state, kept_stages, modal_table
 from benchmarks.atlas.outcome import Outcome, Row, verdict
 from benchmarks.atlas.selectivity import selectivity_ratio, selectivity_runs, sustained_rate
@@ -508,43 +508,37 @@ def s4_modes(ctx: Context) -> Outcome:
     return _outcome(ctx, "S4", rows, {"direction": r}, names)
 
 
-def _lift_rate(b: dict[str, Any]) -> float:
-    """The TP's upward speed over the second half of branch ``b`` [mm/s]."""
-    t, s, _ = np.array(b["rows"]).T
-    half = np.searchsorted(t, 0.5 * (t[0] + t[-1]))
-    return float((s[half] - s[-1]) / (t[-1] - t[half]))
-
-
 def _branch_state(b: dict[str, Any]) -> str:
     t, s, n = np.array(b["rows"]).T
     return (
         f"after {1e3 * (t[-1] - t[0]):.0f} ms the TP {s[0] - s[-1]:+.3f} mm up "
-        f"({_lift_rate(b):+.2f} mm/s over the second half), normal force {1e-3 * n[-1]:.2f} kN"
+        f"({lift_rate(b['rows']):+.2f} mm/s over the second half), normal force "
+        f"{1e-3 * n[-1]:.2f} kN"
     )
 
 
-def _released(b: dict[str, Any], slip_rate_mm_s: float) -> bool:
-    """Whether the TP of dismount branch ``b`` ends released: separated, or above its
-    first-contact position (settlement < 0) and lifting faster than ``slip_rate_mm_s``
-    [mm/s] over the second half (a shaken TP can still strike the MP there)."""
-    return b["separated"] or (b["rows"][-1][1] < 0.0 and _lift_rate(b) > slip_rate_mm_s)
-
-
-def _release_word(b: dict[str, Any], slip_rate_mm_s: float) -> str:
-    """How dismount branch ``b`` ends, in words (``_released``)."""
-    if b["separated"]:
+def _release_word(b: dict[str, Any], settled_normal_N: float, slip_rate_mm_s: float) -> str:
+    """How dismount branch ``b`` ends, in words: separated or released (by
+    ``benchmarks.atlas.dismount.released``, from a state with the contact normal force
+    ``settled_normal_N`` [N] and the event threshold ``slip_rate_mm_s`` [mm/s]), or it holds,
+    lifting or not, and where it stands against its first-contact position."""
+    rows = b["rows"]
+    if separated(rows, settled_normal_N):
         return "separated"
-    if _released(b, slip_rate_mm_s):
+    if released(rows, settled_normal_N, slip_rate_mm_s):
         return "released: above its first-contact position and lifting"
-    if _lift_rate(b) > slip_rate_mm_s:
-        return f"holds so far: lifting, {b['rows'][-1][1]:.3f} mm below its first-contact position"
-    return "holds"
+    place = "below" if rows[-1][1] >= 0.0 else "above"
+    where = f"{abs(rows[-1][1]):.3f} mm {place} its first-contact position at the end"
+    if lift_rate(rows) > slip_rate_mm_s:
+        return f"holds, lifting, {where}"
+    return f"holds, {where}"
 
 
 def _dismount_rows(r: dict[str, Any], state: str, slip_rate_mm_s: float) -> list[Row]:
-    """The S5 rows of the dismount runs ``r`` from ``state`` (words); a branch releases by
-    ``_released`` with the event threshold ``slip_rate_mm_s`` [mm/s]."""
+    """The S5 rows of the dismount runs ``r`` from ``state`` (words), with the case's event
+    threshold ``slip_rate_mm_s`` [mm/s] (``_release_word``)."""
     b, out = r["branches"], r["pull_out_N"]
+    n0 = r["settled"]["normal_N"]
     settled = (
         f"{state} {r['settled']['settlement_mm']:.3f} mm, normal force "
         f"{1e-3 * r['settled']['normal_N']:.2f} kN, rigid Coulomb pull-out "
@@ -556,8 +550,8 @@ def _dismount_rows(r: dict[str, Any], state: str, slip_rate_mm_s: float) -> list
         Row(
             f"{state}: pull alone at the self-weight force ({1e-3 * pull:g} kN) does not "
             "release (§5.5)",
-            f"{_branch_state(first)}; {_release_word(first, slip_rate_mm_s)}; {settled}",
-            verdict(not _released(first, slip_rate_mm_s)),
+            f"{_branch_state(first)}; {_release_word(first, n0, slip_rate_mm_s)}; {settled}",
+            verdict(not first["released"]),
         )
     ]
     for factor in PULL_FACTORS[1:]:
@@ -566,7 +560,7 @@ def _dismount_rows(r: dict[str, Any], state: str, slip_rate_mm_s: float) -> list
             Row(
                 f"{state}: pull alone at {factor:g} x the self-weight force "
                 f"({1e-3 * factor * r['self_weight_N']:g} kN)",
-                f"{_branch_state(branch)}; {_release_word(branch, slip_rate_mm_s)}",
+                f"{_branch_state(branch)}; {_release_word(branch, n0, slip_rate_mm_s)}",
                 "measured",
             )
         )
@@ -588,8 +582,8 @@ def _dismount_rows(r: dict[str, Any], state: str, slip_rate_mm_s: float) -> list
                 f"{'best mode' if wanted else 'control'} ({branch['frequency_Hz']:.2f} Hz, "
                 f"driven at {branch['forcing_Hz']:.2f} Hz) "
                 f"{'releases' if wanted else 'does not release'}",
-                f"{_branch_state(branch)}; {_release_word(branch, slip_rate_mm_s)}",
-                verdict(_released(branch, slip_rate_mm_s) == wanted),
+                f"{_branch_state(branch)}; {_release_word(branch, n0, slip_rate_mm_s)}",
+                verdict(branch["released"] == wanted),
             )
         )
     lift = {k: b[k]["rows"][0][1] - b[k]["rows"][-1][1] for k in ("modal", "control")}
@@ -607,12 +601,9 @@ def _dismount_rows(r: dict[str, Any], state: str, slip_rate_mm_s: float) -> list
         Row(
             f"{state}: resonance-selective release: the modal branch releases, the control "
             "does not",
-            f"modal {_release_word(b['modal'], slip_rate_mm_s)}, control "
-            f"{_release_word(b['control'], slip_rate_mm_s)}",
-            verdict(
-                _released(b["modal"], slip_rate_mm_s)
-                and not _released(b["control"], slip_rate_mm_s)
-            ),
+            f"modal {_release_word(b['modal'], n0, slip_rate_mm_s)}, control "
+            f"{_release_word(b['control'], n0, slip_rate_mm_s)}",
+            verdict(b["modal"]["released"] and not b["control"]["released"]),
         )
     )
     return rows
@@ -639,12 +630,12 @@ def _motors_rows(
             "measured",
         )
     ]
-    b = r["branches"]
+    b, n0 = r["branches"], r["settled"]["normal_N"]
     if "modal" not in b:  # the pull alone released the joint: no pulled state to vibrate
         return rows
     parts = [
         f"{name} ({b[name]['frequency_Hz']:.2f} Hz, driven at {b[name]['forcing_Hz']:.2f} Hz): "
-        f"{_branch_state(b[name])}; {_release_word(b[name], slip_rate_mm_s)}"
+        f"{_branch_state(b[name])}; {_release_word(b[name], n0, slip_rate_mm_s)}"
         for name in ("modal", "control")
     ]
     rows.append(
@@ -747,7 +738,7 @@ def s5_dismount(ctx: Context) -> Outcome:
         )
         state = f"installed (t = {r['settled']['time_s']:.2f} s)"
         rows += _dismount_rows(r, state, slip_rate)
-        held = "modal" in r["branches"] and not _released(r["branches"]["modal"], slip_rate)
+        held = "modal" in r["branches"] and not r["branches"]["modal"]["released"]
         if held:  # the probe: the force of the experiments' exciter
             runs["installed, motors"] = motors = dismount_runs(
                 ctx.comm,

@@ -9,10 +9,11 @@ motors' force at the best mode, 0.3632 f^2 N (docs/physics.md §3), at both freq
 The frequencies are the installation run's choice (``benchmarks.branches.settle``, or the
 installation run's own), a modal
 stage driven at the time-discrete natural frequency of its mode
-(``solver.installation.planning.compensate``). The TP has separated when it is above its
-first-contact position (settlement < 0) and the contact normal force is below
-``SEPARATION_FRACTION`` of the settled one. Kept as ``run.json`` in its folder (a later call
-with the same request reads it).
+(``solver.installation.planning.compensate``). A branch ends released (:func:`released`) when
+the TP is above its first-contact position (settlement < 0) and has separated (the contact
+normal force below ``SEPARATION_FRACTION`` of the settled one) or lifts faster than the case's
+event threshold ``output.slip_rate_mm_s`` (a shaken TP still strikes the MP there). Kept as
+``run.json`` in its folder (a later call with the same request reads it).
 """
 
 import time
@@ -33,10 +34,34 @@ from solver.installation.model import attach_vibration
 from solver.installation.planning import compensate
 from solver.installation.settings import StaticForceSettings
 
-__all__ = ["dismount_runs"]
+__all__ = ["dismount_runs", "lift_rate", "released", "separated"]
 
 SEPARATION_FRACTION = 0.01  #: normal force below this fraction of the settled one: separated
-CHUNKS = 10  #: a vibration branch stops at the first of these chunks that ends separated
+CHUNKS = 10  #: a vibration branch stops at the first of these chunks that ends released
+
+
+def lift_rate(rows: list) -> float:
+    """The TP's upward speed [mm/s] over the second half of a branch's rows (time [s],
+    settlement [mm], contact normal force [N]); 0 where the second half has no length."""
+    t, s, _ = np.array(rows).T
+    half = np.searchsorted(t, 0.5 * (t[0] + t[-1]))
+    if t[-1] <= t[half]:
+        return 0.0
+    return float((s[half] - s[-1]) / (t[-1] - t[half]))
+
+
+def separated(rows: list, settled_normal_N: float) -> bool:
+    """Whether a branch's rows end with the TP above its first-contact position and a contact
+    normal force below ``SEPARATION_FRACTION`` of ``settled_normal_N`` [N]."""
+    return rows[-1][1] < 0.0 and rows[-1][2] < SEPARATION_FRACTION * settled_normal_N
+
+
+def released(rows: list, settled_normal_N: float, slip_rate_mm_s: float) -> bool:
+    """Whether a branch's rows end with the TP released: above its first-contact position and
+    separated, or lifting faster than ``slip_rate_mm_s`` [mm/s] over the second half."""
+    return separated(rows, settled_normal_N) or (
+        rows[-1][1] < 0.0 and lift_rate(rows) > slip_rate_mm_s
+    )
 
 
 def dismount_runs(
@@ -55,7 +80,7 @@ def dismount_runs(
     [N] at the best mode and at the control frequency (at most ``duration_s`` each).
     The vibration branches run only where the first pull alone holds. Returns (and keeps in
     ``folder``/run.json) per branch its (time [s], settlement [mm], normal force [N]) rows and
-    whether it separated, the settled state, the rigid Coulomb pull-out forces
+    whether it ended released (:func:`released`), the settled state, the rigid Coulomb pull-out forces
     and the wall time [s] (collective)."""
     request = {
         "case": case_name,
@@ -87,8 +112,7 @@ def dismount_runs(
         amplitude_N if amplitude_N is not None else float(eccentric_amplitude(modal.frequency_Hz))
     )
 
-    def separated(rows: list) -> bool:
-        return rows[-1][1] < 0.0 and rows[-1][2] < SEPARATION_FRACTION * n0
+    slip_rate = case.output.slip_rate_mm_s
 
     # times from the end of the self-weight stage: its force is held to t0, then ramped to the pull
     since = t0 - sw.duration_s
@@ -108,10 +132,10 @@ def dismount_runs(
     pulled = folder / "pulled"
     for factor in pull_factors:
         rows = pull_alone(factor)
-        branches[f"pull {factor:g} x"] = {"rows": rows, "separated": separated(rows)}
+        branches[f"pull {factor:g} x"] = {"rows": rows, "released": released(rows, n0, slip_rate)}
         if factor == pull_factors[0]:
             checkpoint.save(pulled, problem, {})
-    if not branches[f"pull {pull_factors[0]:g} x"]["separated"]:
+    if not branches[f"pull {pull_factors[0]:g} x"]["released"]:
         for name, e in (("modal", drives[0]), ("control", drives[1])):
             checkpoint.restore(pulled, problem)
             problem.reset_operator()
@@ -125,11 +149,11 @@ def dismount_runs(
                 advance(
                     model, start + k * duration_s / CHUNKS, 1.0 / (e.forcing_Hz * steps), branch
                 )
-                if separated(branch):
+                if released(branch, n0, slip_rate):
                     break
             branches[name] = {
                 "rows": branch,
-                "separated": separated(branch),
+                "released": released(branch, n0, slip_rate),
                 "frequency_Hz": e.frequency_Hz,
                 "forcing_Hz": e.forcing_Hz,
                 "amplitude_N": force_N,

@@ -12,8 +12,8 @@ import shutil
 import pytest
 from mpi4py import MPI
 
-from benchmarks.atlas.catalogue import SCENARIOS, _motors_rows, _released, _release_word
-from benchmarks.atlas.dismount import dismount_runs
+from benchmarks.atlas.catalogue import SCENARIOS, _motors_rows, _release_word
+from benchmarks.atlas.dismount import dismount_runs, lift_rate, released
 from benchmarks.atlas.page import write_page
 from benchmarks.atlas.selectivity import selectivity_ratio
 from benchmarks.scenarios import main
@@ -49,7 +49,7 @@ def test_atlas_runs_scenarios_and_rebuilds_its_page(atlas_output):
     assert "| S8: stiffening |" in text
     dismount = json.loads((out / "runs_of" / "runs" / "dismount" / "run.json").read_text())
     branches = dismount["branches"]
-    vibrated = not branches["pull 1 x"]["separated"]  # the tiny joint is frictionless: released
+    vibrated = not branches["pull 1 x"]["released"]  # the tiny joint is frictionless: released
     assert set(branches) == {"pull 1 x", "pull 1.25 x"} | (
         {"modal", "control"} if vibrated else set()
     )
@@ -179,7 +179,7 @@ def test_dismount_at_the_motors_force(tiny_case, shared_dir):
     # half the self-weight force: the pull alone holds the joint settled by the whole of it
     r = dismount_runs(MPI.COMM_WORLD, "tiny", friction, folder, (0.5,), None, stage_s)
     b = r["branches"]
-    assert not b["pull 0.5 x"]["separated"]
+    assert not b["pull 0.5 x"]["released"]
     motors = eccentric_amplitude(b["modal"]["frequency_Hz"])
     assert b["modal"]["amplitude_N"] == pytest.approx(motors)
     assert b["control"]["amplitude_N"] == b["modal"]["amplitude_N"]
@@ -193,24 +193,30 @@ def test_dismount_at_the_motors_force(tiny_case, shared_dir):
 
 
 def test_release_of_a_dismount_branch():
-    """A branch releases when it separated, or ends above the first-contact position (settlement
-    < 0) lifting faster than the event threshold, though a shaken TP still strikes the MP."""
+    """A branch ends released above its first-contact position (settlement < 0) when the contact
+    normal force is below 1 % of the settled one, or, though a shaken TP still strikes the MP
+    there, when it lifts faster than the event threshold over the second half."""
+    settled_N, threshold = 1e4, 1.0  # N, mm/s
 
-    def branch(settlement_mm: list[float], separated: bool = False) -> dict:
-        rows = [(0.01 * k, s, 1e3) for k, s in enumerate(settlement_mm)]
-        return {"rows": rows, "separated": separated}
+    def rows(settlement_mm: list[float], normal_N: float = 1e3) -> list:
+        return [(0.01 * k, s, normal_N) for k, s in enumerate(settlement_mm)]
 
-    rate = 1.0  # mm/s
-    lifting_above = branch([0.2, 0.1, -0.05, -0.2, -0.4])  # 20 mm/s over the second half
-    assert _released(lifting_above, rate)
-    assert _release_word(lifting_above, rate).startswith("released")
-    lifting_below = branch([0.9, 0.8, 0.6, 0.4, 0.2])
-    assert not _released(lifting_below, rate)
-    assert _release_word(lifting_below, rate).startswith("holds so far")
-    resting_above = branch([-0.1, -0.1, -0.1, -0.1, -0.1])
-    assert not _released(resting_above, rate)
-    assert _release_word(resting_above, rate) == "holds"
-    assert _released(branch([0.1] * 5, separated=True), rate)
+    lifting_above = rows([0.2, 0.1, -0.05, -0.2, -0.4])
+    assert lift_rate(lifting_above) == pytest.approx(17.5)  # (0.35 mm) / (0.02 s)
+    assert released(lifting_above, settled_N, threshold)
+    assert _release_word({"rows": lifting_above}, settled_N, threshold).startswith("released")
+    lifting_below = rows([0.9, 0.8, 0.6, 0.4, 0.2])
+    assert not released(lifting_below, settled_N, threshold)
+    word = _release_word({"rows": lifting_below}, settled_N, threshold)
+    assert word == "holds, lifting, 0.200 mm below its first-contact position at the end"
+    resting_above = rows([-0.1] * 5)
+    assert not released(resting_above, settled_N, threshold)
+    word = _release_word({"rows": resting_above}, settled_N, threshold)
+    assert word == "holds, 0.100 mm above its first-contact position at the end"
+    apart = rows([-0.1] * 5, normal_N=0.0)
+    assert released(apart, settled_N, threshold)
+    assert _release_word({"rows": apart}, settled_N, threshold) == "separated"
+    assert not released(rows([0.1] * 5, normal_N=0.0), settled_N, threshold)
 
 
 @pytest.mark.slow  # about 3 min serially: three settled joints (friction, damping) and their branches
