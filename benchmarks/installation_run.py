@@ -1,12 +1,14 @@
 """Wall time per phase of an installation run: set-up, self-weight, modal stage, each vibration stage.
 
-Runs the installation pipeline of a case (default: ``cases/scaled.toml``, the converged joint
-with the reference sequence, ``demos/install.py --full``) with the phase timer of
-``benchmarks/phase_timer.py`` and prints, per
-time-stepping stage: steps, wall time, s/step, Newton iterations and GMRES iterations per
-step (or the contact points' traction iterations per step), factorisations, step cuts, the mean
-time of one triangular solve with the contact zone's LU factors and the ratio (time per step) /
-(one triangular solve), then the phase breakdown of the stage's steps. The last lines are a table of the whole run.
+Runs the installation pipeline of a case (default: ``cases/scaled.toml``, the default run of
+``demos/install.py``; ``--case scaled_full``: its ``--full``) with the phase timer of
+``benchmarks/phase_timer.py`` and prints, per time-stepping stage: steps, wall time, s/step,
+Newton iterations and GMRES iterations per step (or the contact points' traction iterations
+per step), factorisations, step cuts, the mean time of one triangular solve with the contact
+zone's LU factors and the ratio (time per step) / (one triangular solve), then the phase
+breakdown of the stage's steps. The last lines are a table of the whole run; where the run
+stops (Newton failed at the minimum step, or the contact band left the contact zone), a table
+of the stages before the stop and exit code 1.
 
     mpirun -n 2 python benchmarks/installation_run.py                 # cases/scaled.toml
     mpirun -n 2 python benchmarks/installation_run.py --case scaled_full
@@ -25,6 +27,7 @@ from mpi4py import MPI
 from benchmarks.phase_timer import PhaseTimer
 from common.case import read_case
 from solver.installation.case import InstallationCase
+from solver.installation.cli import fail
 from solver.installation.runner import Installation
 
 
@@ -106,13 +109,27 @@ def main(argv=None) -> int:
     a = p.parse_args(argv)
     comm = MPI.COMM_WORLD
     t0 = time.perf_counter()
-    case = InstallationCase.from_dict(read_case(a.case, a.set))
+    try:
+        case = InstallationCase.from_dict(read_case(a.case, a.set))
+    except ValueError as e:
+        return fail(comm, str(e))
     timer = PhaseTimer().install()
     profile = StageProfile(comm, timer)
     runner = Installation(comm, case, a.output, progress=False, on_stage=profile)
-    runner.run(resume=a.resume)
+    stopped = ""
+    try:
+        runner.run(resume=a.resume)
+    except ValueError as e:  # --resume without a checkpoint, or with one of another case
+        timer.uninstall()
+        return fail(comm, str(e))
+    except RuntimeError as e:  # Newton failed at the minimum step, or the band left the zone
+        stopped = str(e)
     timer.uninstall()
-    profile.table(runner.model.timings_s["set-up"], time.perf_counter() - t0)
+    setup_s = runner.model.timings_s["set-up"] if runner.model is not None else 0.0
+    profile.table(setup_s, time.perf_counter() - t0)
+    if stopped:  # the table holds the stages before the stop
+        profile.say(f"\nrun stopped: {stopped}", flush=True)
+        return 1
     return 0
 
 
