@@ -24,7 +24,9 @@ time (a phase nested in another is not counted twice) per phase:
     other              the rest of Elastodynamics.step
 
 Times are this rank's; ``report`` prints rank 0's, with the number of calls of each phase
-(e.g. factorisations, pairings).
+(e.g. factorisations, pairings), and what the tractions phase did
+(``solver.dynamics.traction_jacobian``): single-precision factorisations of the active points'
+Jacobian, Woodbury updates of the kept factors and FGMRES iterations.
 """
 
 import functools
@@ -38,6 +40,7 @@ import solver.dynamics.factor_store
 import solver.dynamics.linear_algebra
 import solver.dynamics.newton
 import solver.dynamics.point_newton
+import solver.dynamics.traction_jacobian
 
 PHASES = [
     "pairing",
@@ -64,6 +67,8 @@ class PhaseTimer:
         self.calls: dict[str, int] = defaultdict(int)
         self.gmres = 0  #: GMRES iterations (generalized Newton on the zone)
         self.traction_iterations = 0  #: semismooth iterations (Newton on the contact points)
+        #: the traction Jacobian's factorisations, Woodbury updates and FGMRES iterations
+        self.inner: dict[str, int] = defaultdict(int)
         self._stack: list[
             list
         ] = []  # [phase, start, cpu start, wall and cpu time spent in nested phases]
@@ -120,7 +125,28 @@ class PhaseTimer:
             self._wrap(ED, name, "bulk vectors")
         self._count(CN, "gmres")
         self._count(PN.PointNewtonSolver, "traction_iterations")
+        self._tally_inner(solver.dynamics.traction_jacobian.TractionJacobian)
         return self
+
+    def _tally_inner(self, jacobian_class) -> None:
+        """Add the growth of a traction Jacobian's counters over each of its solves to ``inner``."""
+        original = jacobian_class.solve
+        counters = {
+            "factorisations": "factorizations",
+            "updates": "updates",
+            "krylov": "krylov_iterations",
+        }
+
+        @functools.wraps(original)
+        def tallied(jacobian, *args, **kwargs):
+            before = {key: getattr(jacobian, name) for key, name in counters.items()}
+            result = original(jacobian, *args, **kwargs)
+            for key, name in counters.items():
+                self.inner[key] += getattr(jacobian, name) - before[key]
+            return result
+
+        jacobian_class.solve = tallied
+        self._undo.append((jacobian_class, "solve", original))
 
     def _count(self, solver_class, counter: str) -> None:
         """Add the inner iterations of ``solver_class.solve`` (NewtonResult.linear_iterations:
@@ -147,6 +173,7 @@ class PhaseTimer:
         self.calls.clear()
         self.gmres = 0
         self.traction_iterations = 0
+        self.inner.clear()
 
     def triangular_solve_s(self) -> float:
         """Mean wall time of one application of the LU factors (forward and back solve) [s]."""
@@ -177,3 +204,11 @@ class PhaseTimer:
                 )
             say(line + f"  ({self.calls.get(phase, 0)} calls)")
         say(f"    {'total':17s} {total / n:8.3f} s/step{'':33s}CPU {total_cpu / n:7.3f} s/step")
+        if self.traction_iterations:
+            inner = self.inner
+            say(
+                f"    tractions: {inner['factorisations'] / n:.2f} single-precision factorisations, "
+                f"{inner['updates'] / n:.2f} Woodbury updates and {inner['krylov'] / n:.1f} FGMRES "
+                f"iterations per step ({inner['krylov'] / self.traction_iterations:.1f} per "
+                "traction iteration)"
+            )

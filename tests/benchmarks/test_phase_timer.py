@@ -1,0 +1,30 @@
+"""The phase timer's tally of the inner problem's linear algebra (``benchmarks/phase_timer.py``)
+against the traction Jacobian's own counters."""
+
+import numpy as np
+
+from benchmarks.phase_timer import PhaseTimer
+from solver.dynamics.traction_jacobian import TractionJacobian
+
+
+def test_inner_tally_matches_the_jacobian_counters():
+    rng = np.random.default_rng(5)
+    n = 30
+    G = rng.uniform(0.0, 1.0, (3 * n, 3 * n))
+    G = 30.0 * G @ G.T / n
+    jacobian = TractionJacobian()
+    jacobian.set_compliance(G)
+    timer = PhaseTimer().install()
+    try:
+        for size in (20, 20, 19, 12):  # a factorisation, a reuse, an update, a renewal
+            active = np.arange(size)
+            D = np.tile(np.eye(3), (size, 1, 1)) * (1.0 + 0.01 * rng.normal(size=(size, 1, 1)))
+            jacobian.solve(active, D, rng.normal(size=3 * size))
+    finally:
+        timer.uninstall()
+    assert jacobian.factorizations == 2 and jacobian.updates == 1
+    assert dict(timer.inner) == {
+        "factorisations": jacobian.factorizations,
+        "updates": jacobian.updates,
+        "krylov": jacobian.krylov_iterations,
+    }
