@@ -1199,18 +1199,14 @@ def _outcome(
 
 @dataclass(frozen=True)
 class Scenario:
-    """A scenario: its title, its criterion, and the function that runs it (``needs``: what the
-    part of it not yet in the atlas takes)."""
+    """A scenario: its title, its criterion, and the function that runs it."""
 
     title: str
     criterion: str
     run: Callable[[Context], Outcome]
-    needs: str = ""
     #: it reads an installation run of the case (``--installed``)
     installed: bool = False
 
-
-_VIBRATION = "vibration stages on this joint (docs/install.md, Cost)"
 
 SCENARIOS: dict[str, Scenario] = {
     "S1": Scenario(
@@ -1224,8 +1220,6 @@ SCENARIOS: dict[str, Scenario] = {
         "per stage the settlement gained and the sustained rate; modal stages at least 5 times "
         "the control; the last 20 % of a stage adds less than 5 % of its gain",
         s2_sequence,
-        needs="the ten best-ranked modes (the `--full` sequence, about 4 h on its 300 mm contact "
-        "zone): " + _VIBRATION,
         installed=True,
     ),
     "S3": Scenario(
@@ -1240,8 +1234,6 @@ SCENARIOS: dict[str, Scenario] = {
         "settlement rate per ranked mode at equal force; axial against axial plus 5 % lateral "
         "at an anti-symmetric mode",
         s4_modes,
-        needs="the ten best-ranked modes (the `--full` sequence, about 4 h on its 300 mm contact "
-        "zone): " + _VIBRATION,
         installed=True,
     ),
     "S5": Scenario(

@@ -83,8 +83,6 @@ def write_page(output: Path, page: Path) -> None:
     for key, o in outcomes.items():
         lines.append(f"\n## {key}: {o.title}\n")
         lines.append(f"Criterion: {SCENARIOS[key].criterion}.\n")
-        if SCENARIOS[key].needs:
-            lines.append(f"Not in this scenario yet: {SCENARIOS[key].needs}.\n")
         for relative in o.figures:
             name = _figure_name(key, relative)
             lines.append(f"![{key} {Path(relative).stem}](figures/scenarios/{name})\n")
