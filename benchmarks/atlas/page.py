@@ -67,8 +67,13 @@ def write_page(output: Path, page: Path) -> None:
     for o in outcomes.values():
         runs |= o.runs
     lines = [HEADER.format(ranks=", ".join(map(str, sorted(ranks))))]
-    joints = sorted({o.joint for o in outcomes.values()})
-    lines += [f"Joint: {j}.\n" for j in joints]
+    joints: dict[str, list[str]] = {}
+    for key, o in outcomes.items():
+        joints.setdefault(o.joint, []).append(key)
+    if len(joints) == 1:
+        lines.append(f"Joint: {next(iter(joints))}.\n")
+    else:
+        lines += [f"Joint of {', '.join(keys)}: {j}.\n" for j, keys in joints.items()]
     lines += [
         f"Wall time of the scenarios below: {sum(runs.values()) / 60:.1f} min "
         f"({len(runs)} runs, each counted once).\n",

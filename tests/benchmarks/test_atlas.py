@@ -14,6 +14,7 @@ from mpi4py import MPI
 
 from benchmarks.atlas.catalogue import SCENARIOS, _motors_rows, _release_word
 from benchmarks.atlas.dismount import dismount_runs, lift_rate, released
+from benchmarks.atlas.outcome import Outcome, Row
 from benchmarks.atlas.page import write_page
 from benchmarks.atlas.selectivity import selectivity_ratio
 from benchmarks.scenarios import main
@@ -217,6 +218,21 @@ def test_release_of_a_dismount_branch():
     assert released(apart, settled_N, threshold)
     assert _release_word({"rows": apart}, settled_N, threshold) == "separated"
     assert not released(rows([0.1] * 5, normal_N=0.0), settled_N, threshold)
+
+
+def test_page_names_the_joint_of_each_scenario(shared_tmp):
+    """Outcomes on two joints: the page says which scenarios ran on which."""
+    if MPI.COMM_WORLD.rank != 0:  # the page is written on one rank
+        return
+    for key, joint in (("S1", "`a`"), ("S2", "`b`"), ("S3", "`a`")):
+        outcome = Outcome(
+            key, SCENARIOS[key].title, joint, [Row("c", "m", "measured")], {key: 60.0}, 2
+        )
+        outcome.save(shared_tmp / "page" / f"{key}.json")
+    write_page(shared_tmp / "no_runs", shared_tmp / "page.md")
+    text = (shared_tmp / "page.md").read_text()
+    assert "Joint of S1, S3: `a`." in text and "Joint of S2: `b`." in text
+    assert "Wall time of the scenarios below: 3.0 min (3 runs" in text
 
 
 @pytest.mark.slow  # about 3 min serially: three settled joints (friction, damping) and their branches
