@@ -6,9 +6,8 @@ best-ranked natural frequency and, from the same pulled state, at the non-modal 
 frequency, each for at most a given time. The amplitude is a given force or the eccentric
 motors' force at the best mode, 0.3632 f^2 N (docs/physics.md §3), at both frequencies.
 
-The frequencies are the installation run's choice (``benchmarks.branches.settle``, or the
-installation run's own), a modal
-stage driven at the time-discrete natural frequency of its mode
+The frequencies are the installation run's choice (``benchmarks.atlas.settled.settle``, or the
+installation run's own), a modal stage driven at the time-discrete natural frequency of its mode
 (``solver.installation.planning.compensate``). A branch ends released (:func:`released`) when
 the TP is above its first-contact position (settlement < 0) and has separated (the contact
 normal force below ``SEPARATION_FRACTION`` of the settled one) or lifts faster than the case's
@@ -26,15 +25,16 @@ from mpi4py import MPI
 from benchmarks.atlas.installed import restore_installed
 from benchmarks.atlas.kept import keep_run, kept_run
 from benchmarks.atlas.stepping import advance, joint_state
-from benchmarks.branches import settle
+from benchmarks.atlas.settled import settle
 from solver.dynamics.loads import Schedule, Stage, eccentric_amplitude
 from solver.installation import checkpoint
 from solver.installation.dismount import pull_out_force
-from solver.installation.model import attach_vibration
+from solver.installation.frequencies import Excitation
+from solver.installation.model import JointModel, attach_vibration
 from solver.installation.planning import compensate
 from solver.installation.settings import StaticForceSettings
 
-__all__ = ["dismount_runs", "lift_rate", "released", "separated"]
+__all__ = ["dismount_branches", "dismount_runs", "lift_rate", "released", "separated"]
 
 SEPARATION_FRACTION = 0.01  #: normal force below this fraction of the settled one: separated
 CHUNKS = 10  #: a vibration branch stops at the first of these chunks that ends released
@@ -75,13 +75,8 @@ def dismount_runs(
     installed: Path | None = None,
 ) -> dict[str, Any]:
     """Settle the case's joint (or restore the state ``installed``: the output folder of an
-    installation run of the case, its last checkpoint), then the pulls ``pull_factors`` x the self-weight force alone
-    (ramped over ``duration_s`` [s] and held as long), and the first pull plus ``amplitude_N``
-    [N] at the best mode and at the control frequency (at most ``duration_s`` each).
-    The vibration branches run only where the first pull alone holds. Returns (and keeps in
-    ``folder``/run.json) per branch its (time [s], settlement [mm], normal force [N]) rows and
-    whether it ended released (:func:`released`), the settled state, the rigid Coulomb pull-out forces
-    and the wall time [s] (collective)."""
+    installation run of the case, its last checkpoint), then :func:`dismount_branches`; the
+    result, with its request and wall time [s], is kept in ``folder``/run.json (collective)."""
     request = {
         "case": case_name,
         "overrides": overrides,
@@ -99,6 +94,36 @@ def dismount_runs(
         model, chosen, natural_Hz = joint.model, joint.chosen, list(joint.frequencies_hz)
     else:
         model, chosen, natural_Hz = restore_installed(comm, case_name, overrides, installed)
+    result = {
+        "request": request,
+        **dismount_branches(
+            model, chosen, natural_Hz, folder, pull_factors, amplitude_N, duration_s
+        ),
+        "wall_s": time.perf_counter() - wall,
+    }
+    keep_run(comm, folder, result)
+    return result
+
+
+def dismount_branches(
+    model: JointModel,
+    chosen: list[Excitation],
+    natural_Hz: list[float],
+    folder: Path,
+    pull_factors: tuple[float, ...],
+    amplitude_N: float | None,
+    duration_s: float,
+    vibrated: tuple[str, ...] = ("modal", "control"),
+) -> dict[str, Any]:
+    """From the joint's present state (held at the self-weight force), with ``chosen`` the
+    frequency choice of its modes (``natural_Hz`` [Hz]): the pulls ``pull_factors`` x the
+    self-weight force alone (ramped over ``duration_s`` [s] and held as long), and the first
+    pull plus ``amplitude_N`` [N] (None: the motors' force at the best mode) at the best mode
+    and at the control frequency (``vibrated``: those of the two to run; at most
+    ``duration_s`` each), only where the first pull alone holds. Returns per branch its
+    (time [s], settlement [mm], normal force [N]) rows and whether it ended released
+    (:func:`released`), the settled state and the rigid Coulomb pull-out forces [N]; the states
+    it branches from are saved in ``folder`` (collective)."""
     case = model.case
     sw, problem = case.self_weight, model.problem
     t0, s0, n0 = joint_state(model)
@@ -137,6 +162,8 @@ def dismount_runs(
             checkpoint.save(pulled, problem, {})
     if not branches[f"pull {pull_factors[0]:g} x"]["released"]:
         for name, e in (("modal", drives[0]), ("control", drives[1])):
+            if name not in vibrated:
+                continue
             checkpoint.restore(pulled, problem)
             problem.reset_operator()
             start = problem.t
@@ -160,8 +187,7 @@ def dismount_runs(
             }
             problem.set_scheme(case.self_weight_scheme())
     alpha, friction = case.joint.mp.half_angle, case.friction
-    result = {
-        "request": request,
+    return {
         "name": folder.name,
         "settled": {"time_s": t0, "settlement_mm": s0, "normal_N": n0},
         "self_weight_N": abs(sw.force_N),
@@ -171,7 +197,4 @@ def dismount_runs(
         },
         "natural_Hz": [float(f) for f in np.asarray(natural_Hz)],
         "branches": branches,
-        "wall_s": time.perf_counter() - wall,
     }
-    keep_run(comm, folder, result)
-    return result

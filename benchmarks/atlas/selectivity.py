@@ -17,7 +17,7 @@ from mpi4py import MPI
 
 from benchmarks.atlas.kept import keep_run, kept_run
 from benchmarks.atlas.stepping import joint_state, run_schedule
-from benchmarks.branches import SettledJoint, settle
+from benchmarks.atlas.settled import SettledJoint, settle
 from solver.dynamics.loads import Schedule, Stage
 from solver.installation import checkpoint
 from solver.installation.model import JointModel

@@ -28,7 +28,7 @@ from mpi4py import MPI
 
 from benchmarks.atlas.kept import keep_run, kept_run
 from benchmarks.atlas.stepping import advance, joint_state, run_schedule
-from benchmarks.branches import settle
+from benchmarks.atlas.settled import settle
 from common.case import read_case
 from solver.dynamics.fidelity import discrete_frequency
 from solver.dynamics.loads import Schedule, Stage, frequency_ramp, frequency_steps

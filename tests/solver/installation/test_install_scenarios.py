@@ -1,5 +1,6 @@
-"""docs/physics.md §5 observations reproduced by the joint model: the atlas's S1, the friction half
-of S6 and S8 (docs/scenarios.md), shortened, on the default joint.
+"""docs/physics.md §5 observations reproduced by the joint model: the atlas's S1, a two-stage S2,
+the friction half of S6, S8 and the release of S5 (docs/scenarios.md), shortened, on the
+default joint.
 
 cases/suite.toml: the joint and contact solver of the default run (cases/scaled.toml: 48
 elements around, 80 mm axially, 10 mm axially in the contact zone, P2, its ten lowest
@@ -21,25 +22,32 @@ oscillation on the wedge so that the TP moves in stick-slip steps rather than sl
   (three stages of 0.05 s, each with its own set-up of the contact solver: the file's most
   costly test; ``mpirun -n 2 python -m mpi4py -m pytest -s --durations=0`` on this file prints
   the times).
+* §5.5 (the atlas's S5, benchmarks/atlas/dismount.py, its modal branch): from the settled
+  joint, a pull between the rigid Coulomb pull-out forces with mu_d and with mu_s minus the
+  amplitude holds alone; the pull plus 3.6 kN at the best-ranked mode releases the TP. (The
+  peak force is above the pull-out force with mu_s; whether the release is selective, the
+  atlas's S5 measures with the control as well.)
 
-The fixture's end-of-ramp modal analysis is the installation run's (``benchmarks.branches.choose``:
-the case's 20 modes and the frequency choice), so that the two-stage S2 starts from it.
-
-The scenarios on the coarse joint (8 around, which locks) are test_install_vibration.py
-(§5.2, 5.3, 5.6) and test_install_dismount.py (§5.5, 5.7); docs/install.md reports their
-measured outcome.
+The fixture's end-of-ramp modal analysis is the installation run's
+(``benchmarks.atlas.settled.choose``: the case's 20 modes and the frequency choice), and its
+state is kept, so that the S2 and S5 tests start from it in any order.
 """
 
+from pathlib import Path
 from typing import NamedTuple
 
 import numpy as np
 import pytest
 from mpi4py import MPI
 
+from benchmarks.atlas.dismount import dismount_branches
 from benchmarks.atlas.selectivity import selectivity_branches, selectivity_ratio
-from benchmarks.branches import SettledJoint, choose
+from benchmarks.atlas.stepping import joint_state
+from benchmarks.atlas.settled import SettledJoint, choose
 from common.case import read_case
 from solver.dynamics.time_loop import run
+from solver.installation import checkpoint
+from solver.installation.dismount import pull_out_force
 from solver.installation.case import InstallationCase
 from solver.installation.model import JointModel, set_up_joint_model, settled_modes
 from solver.post.report import SELECTIVE, stick_slip_events
@@ -49,6 +57,7 @@ pytestmark = pytest.mark.mpi
 LOW_FRICTION = ["friction.mu_s=0.0625", "friction.mu_d=0.05"]
 N_MODES = 6
 LEAD_IN = BRANCH = 0.05  #: the two-stage S2's lead-in and branches [s]
+DISMOUNT_S = 0.05  #: S5: the pull's ramp and its hold, and the longest pull + vibration [s]
 
 
 def _self_weight(
@@ -78,12 +87,27 @@ class Reference(NamedTuple):
     history: np.ndarray  #: (time [s], settlement [mm]) rows of the ramp
     half_load: np.ndarray  #: the N_MODES lowest frequencies at half the load [Hz]
     settled: SettledJoint  #: at the end of the ramp, its modes and the frequency choice
+    saved: Path  #: the state at the end of the ramp (solver.installation.checkpoint)
 
 
 @pytest.fixture(scope="module")
-def reference() -> Reference:
+def reference(shared_dir) -> Reference:
     history, (half_load,), model = _self_weight([], modes_at=(0.5,))
-    return Reference(history, half_load, choose(model))
+    saved = shared_dir("end_of_ramp")
+    checkpoint.save(saved, model.problem, {})
+    return Reference(history, half_load, choose(model), saved)
+
+
+def _end_of_ramp(reference: Reference) -> SettledJoint:
+    """The joint put back at the end of the ramp: its state, the self-weight load and scheme."""
+    model = reference.settled.model
+    case, problem = model.case, model.problem
+    problem.load.static_axial = case.static_force.history(case.self_weight)
+    problem.load.shaker = None
+    checkpoint.restore(reference.saved, problem)
+    problem.set_scheme(case.self_weight_scheme())
+    problem.reset_operator()
+    return reference.settled
 
 
 def test_stick_slip_settlement_under_slowly_increasing_load(reference):
@@ -124,7 +148,7 @@ def test_natural_frequencies_rise_with_settlement(reference):
 
 def test_modal_stage_settles_faster_than_the_control(reference, shared_dir):
     """The two-stage S2 from the end of the ramp: lead-in, control and mode at 3.6 kN."""
-    r = selectivity_branches(reference.settled, shared_dir("selectivity"), LEAD_IN, BRANCH)
+    r = selectivity_branches(_end_of_ramp(reference), shared_dir("selectivity"), LEAD_IN, BRANCH)
     modal, control = r["branches"]["modal"], r["branches"]["control"]
     ratio = selectivity_ratio(modal["rows"], control["rows"])
     print(
@@ -132,3 +156,43 @@ def test_modal_stage_settles_faster_than_the_control(reference, shared_dir):
         f"the control {control['frequency_Hz']:.2f} Hz: {ratio:.1f} x over the second half"
     )
     assert ratio >= SELECTIVE
+
+
+def test_pull_alone_holds_pull_plus_vibration_at_the_mode_releases(reference, shared_dir):
+    """The atlas's S5 (benchmarks/atlas/dismount.py) from the end of the ramp, its modal branch
+    at the case's amplitude A = 3.6 kN: a pull P between the rigid Coulomb pull-out forces with
+    mu_d and with mu_s minus A holds alone for DISMOUNT_S; P plus A at the best-ranked mode
+    releases the TP within DISMOUNT_S (above its first-contact position, separated or lifting
+    faster than the event threshold)."""
+    joint = _end_of_ramp(reference)
+    model = joint.model
+    case = model.case
+    _, _, n0 = joint_state(model)
+    alpha, amplitude = case.joint.mp.half_angle, case.vibration.amplitude_N
+    holds, frees = (
+        pull_out_force(n0, mu, alpha) for mu in (case.friction.mu_d, case.friction.mu_s)
+    )
+    pull = 0.5 * (holds + frees - amplitude)
+    factor = pull / abs(case.self_weight.force_N)
+    r = dismount_branches(
+        model,
+        joint.chosen,
+        list(joint.frequencies_hz),
+        shared_dir("dismount"),
+        (factor,),
+        amplitude,
+        DISMOUNT_S,
+        vibrated=("modal",),
+    )
+    alone, modal = r["branches"][f"pull {factor:g} x"], r["branches"]["modal"]
+    (t0, s0, _), (t1, s1, n1), (t2, s2, n2) = alone["rows"][0], alone["rows"][-1], modal["rows"][-1]
+    print(
+        f"\ndismount: normal force {n0 / 1e3:.2f} kN, pull-out {holds / 1e3:.2f} / "
+        f"{frees / 1e3:.2f} kN (mu_d / mu_s); pull {pull / 1e3:.2f} kN alone: TP up "
+        f"{s0 - s1:+.4f} mm in {t1 - t0:.3f} s, normal force {n1 / 1e3:.2f} kN; + {amplitude:.0f} N "
+        f"at {modal['frequency_Hz']:.2f} Hz (driven at {modal['forcing_Hz']:.2f} Hz) for "
+        f"{t2 - t1:.4f} s: settlement {s2:+.4f} mm, normal force {n2 / 1e3:.2f} kN"
+    )
+    assert pull < holds and pull + amplitude > frees
+    assert not alone["released"] and s0 - s1 < 1.0 and n1 > 0.5 * n0  # mm; the contact holds
+    assert modal["released"]
