@@ -40,7 +40,7 @@ then with 3.6 kN at the best mode) run in the test suite (`make test`,
 `tests/solver/installation/test_install_scenarios.py`, serial and on 2 ranks) on the default
 joint with an 80 mm contact zone and the self-weight ramped over 1 s (`cases/suite.toml`). On 2
 ranks the ramp with its two modal analyses takes 3.6 min, the low-friction ramp 4.4 min, the
-two-stage S2 7.0 min (the mode 8.0 times the control's rate) and S5's release 8.5 min (the pull
+two-stage S2 7.0 min (the mode 8.0 times the control's rate) and S5's release 7.9 min (the pull
 alone lifts the TP 0.4 um; with the vibration it is released 35 ms on)
 (`mpirun -n 2 python -m mpi4py -m pytest -s --durations=0 tests/solver/installation/test_install_scenarios.py`).
 """
