@@ -1,3 +1,2 @@
 """Timing and convergence scripts (run as ``python benchmarks/<name>.py``); ``phase_timer``
-instruments the time step, ``branches`` holds the docs/physics.md §5 branch functions shared with
-the tests, ``atlas`` the scenario atlas of ``scenarios.py``."""
+instruments the time step, ``atlas`` holds the scenario atlas of ``scenarios.py``."""

@@ -18,11 +18,10 @@ __all__ = ["SettledJoint", "choose", "settle"]
 
 @dataclass
 class SettledJoint:
-    """The joint after its self-weight stage and the frequencies chosen from its modes [Hz]."""
+    """The joint after its self-weight stage, its natural frequencies [Hz] and the frequencies
+    chosen from its modes."""
 
     model: JointModel
-    f_r: float  #: best-ranked natural frequency [Hz]
-    f_c: float  #: non-modal control frequency [Hz]
     frequencies_hz: np.ndarray  #: natural frequencies of the settled joint [Hz]
     chosen: list[Excitation]  #: the installation run's frequency choice
 
@@ -50,7 +49,4 @@ def choose(model: JointModel) -> SettledJoint:
         zeta=case.damping.zeta,
         m_max=min(12, (2 * case.mesh.n_circumferential - 1) // 2),
     )
-    chosen = choose_frequencies(records, case.vibration)
-    f_r = next(e.frequency_Hz for e in sorted(chosen, key=lambda e: e.rank) if e.role == "modal")
-    f_c = next(e.frequency_Hz for e in chosen if e.role == "control")
-    return SettledJoint(model, f_r, f_c, result.frequencies_hz, chosen)
+    return SettledJoint(model, result.frequencies_hz, choose_frequencies(records, case.vibration))
