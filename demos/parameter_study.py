@@ -6,7 +6,8 @@ each variant changes one thing: friction 0.0625/0.05, d_c = 1 s/m, modal damping
 mesh size halved. Every variant runs the installation pipeline (self-weight, modal stage, one
 stage at the best-ranked natural frequency and one at the non-modal control frequency, 3.6 kN)
 into its own sub-folder of --output. Written as the study goes: summary.csv (settlement per
-stage per variant, mm) and summary.png (settlement gained per stage and variant).
+stage per variant, mm, and the sustained rate over each stage's second half, mm/s) and
+summary.png (both per stage and variant).
 
 Without options: cases/parameter_study.toml (the default joint of cases/scaled.toml, 48
 around, P2, within 3 % of the converged frequencies: docs/install.md "Discretisation").
@@ -87,7 +88,8 @@ def main(argv: list[str] | None = None) -> int:
             for r in new:
                 log(
                     f"  {r['name']:>12} {r['role']:>11} {r['frequency_Hz']:8.2f} Hz: "
-                    f"gained {r['gained_mm']:+.4f} mm, settlement {r['settlement_end_mm']:.4f} mm"
+                    f"gained {r['gained_mm']:+.4f} mm ({r['sustained_rate_mm_s']:+.3f} mm/s over "
+                    f"the second half), settlement {r['settlement_end_mm']:.4f} mm"
                 )
         log(f"  {status} in {time.perf_counter() - wall:.1f} s")
         write_csv(out / "summary.csv", SUMMARY_COLUMNS, rows, comm)

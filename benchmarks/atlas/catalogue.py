@@ -160,11 +160,6 @@ def _stage_label(s: dict[str, Any], e: Excitation) -> str:
     return f"{s['name']} at {e.drive_Hz:.2f} Hz, {what}"
 
 
-def _rate_mm_s(s: dict[str, Any]) -> float:
-    """A stage's settlement rate over its second half [mm/s] (``stages`` of a run)."""
-    return 2 * s["gained_second_half_mm"] / (s["end_s"] - s["start_s"])
-
-
 def s2_sequence(ctx: Context) -> Outcome:
     """S2 on the reference sequence of the installation run ``ctx.installed`` (its stages up
     to its last checkpoint): per vibration stage the settlement gained, the rate over its
@@ -185,7 +180,7 @@ def s2_sequence(ctx: Context) -> Outcome:
                 f"{_stage_label(s, excitations[s['stage'] - 1])}: the last "
                 f"{100 * report.LATE:g} % adds less than {100 * report.LATE_SHARE:g} % of the "
                 "stage's gain (§5.2)",
-                f"gained {1e3 * gain:.1f} um, {_rate_mm_s(s):.3f} mm/s over its second half; "
+                f"gained {1e3 * gain:.1f} um, {report.sustained_rate_mm_s(s):.3f} mm/s over its second half; "
                 f"the last {100 * report.LATE:g} % adds "
                 f"{100 * share:.1f} % (its rate {share / report.LATE:.2f} x the stage's mean)",
                 verdict(report.stabilised(gain, late)),
@@ -292,7 +287,7 @@ def _continued_rows(
             f"gained {1e3 * (settlement[-1] - settlement[0]):.1f} um more ("
             + ", ".join(f"{1e3 * g:.1f}" for g in np.diff(fifths))
             + f" um per {1e3 * duration / 5:.0f} ms), {2 * half / duration:.3f} mm/s over its "
-            f"second half against {_rate_mm_s(s):.3f} mm/s over the stage's; "
+            f"second half against {report.sustained_rate_mm_s(s):.3f} mm/s over the stage's; "
             f"{c['step_cuts']} step cut(s)",
             "measured",
         )
@@ -410,7 +405,7 @@ def s4_modes(ctx: Context) -> Outcome:
     excitations = [Excitation(**e) for e in manifest["excitations"]]
     modal = sorted(
         (
-            (_rate_mm_s(s), excitations[s["stage"] - 1])
+            (report.sustained_rate_mm_s(s), excitations[s["stage"] - 1])
             for s in manifest["stages"]
             if s["stage"] >= 1 and s["steps"] and excitations[s["stage"] - 1].role == "modal"
         ),

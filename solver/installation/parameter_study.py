@@ -14,6 +14,8 @@ from __future__ import annotations
 from dataclasses import dataclass
 from typing import Any
 
+from solver.post.report import sustained_rate_mm_s
+
 
 @dataclass(frozen=True)
 class Variant:
@@ -70,6 +72,8 @@ SUMMARY_COLUMNS = [
     "settlement_start_mm",
     "settlement_end_mm",
     "gained_mm",
+    "gained_second_half_mm",
+    "sustained_rate_mm_s",
     "stick_slip_events",
     "steps",
     "wall_s",
@@ -81,7 +85,10 @@ def summary_rows(
     variant: Variant, stages: list[dict[str, Any]], excitations, status: str
 ) -> list[dict[str, Any]]:
     """One row per stage of a variant's run (``Installation.stages``), with the role of each
-    vibration stage (modal / control / ...) from ``Installation.excitations``."""
+    vibration stage (modal / control / ...) from ``Installation.excitations`` and its sustained
+    rate (``solver.post.report.sustained_rate_mm_s``; a stage's whole gain also holds the event
+    in which the joint settles to the depth that holds the new excitation, largest in the first
+    vibration stage)."""
     roles = ["self-weight"] + [e.role for e in excitations]
     return [
         {
@@ -96,6 +103,8 @@ def summary_rows(
             "settlement_start_mm": s["settlement_start_mm"],
             "settlement_end_mm": s["settlement_end_mm"],
             "gained_mm": s["gained_mm"],
+            "gained_second_half_mm": s["gained_second_half_mm"],
+            "sustained_rate_mm_s": sustained_rate_mm_s(s),
             "stick_slip_events": s["stick_slip_events"],
             "steps": s["steps"],
             "wall_s": s["wall_s"],

@@ -186,7 +186,8 @@ def plot_dismount(
 
 
 def plot_parameter_study(rows: list[dict[str, Any]], path: Path, comm: MPI.Comm) -> None:
-    """Settlement gained per stage (grouped bars) for each variant (rank 0)."""
+    """Per stage (grouped bars) for each variant (rank 0): the settlement gained [mm] and, for
+    the vibration stages, the sustained rate over the stage's second half [mm/s]."""
     if comm.rank != 0 or not rows:
         return
     os.environ.setdefault("MPLBACKEND", "Agg")
@@ -194,24 +195,33 @@ def plot_parameter_study(rows: list[dict[str, Any]], path: Path, comm: MPI.Comm)
 
     names = list(dict.fromkeys(r["variant"] for r in rows))
     n_stages = 1 + max(r["stage"] for r in rows)
-    width = 0.8 / n_stages
-    fig, ax = plt.subplots(figsize=(max(6, 1.8 * len(names)), 4.5))
     x = np.arange(len(names))
-    for k in range(n_stages):
-        gain = [
-            next((r["gained_mm"] for r in rows if r["variant"] == n and r["stage"] == k), np.nan)
-            for n in names
-        ]
-        label = next(
-            (
-                f"{r['role'] or r['name']}"
-                + (f" ({r['frequency_Hz']:.0f} Hz)" if r["frequency_Hz"] else "")
-                for r in rows
-                if r["stage"] == k and r["variant"] == names[0]
-            ),
-            f"stage {k}",
-        )
-        ax.bar(x + (k - 0.5 * (n_stages - 1)) * width, gain, width, label=label)
+    fig, (top, bottom) = plt.subplots(2, 1, figsize=(max(6, 1.8 * len(names)), 7), sharex=True)
+    panels = (
+        (top, "gained_mm", range(n_stages), "settlement gained in the stage [mm]"),
+        (bottom, "sustained_rate_mm_s", range(1, n_stages), "rate over its second half [mm/s]"),
+    )
+    for ax, key, stages, ylabel in panels:
+        width = 0.8 / max(len(stages), 1)
+        for j, k in enumerate(stages):
+            value = [
+                next((r[key] for r in rows if r["variant"] == n and r["stage"] == k), np.nan)
+                for n in names
+            ]
+            label = next(
+                (
+                    f"{r['role'] or r['name']}"
+                    + (f" ({r['frequency_Hz']:.0f} Hz)" if r["frequency_Hz"] else "")
+                    for r in rows
+                    if r["stage"] == k and r["variant"] == names[0]
+                ),
+                f"stage {k}",
+            )
+            offset = (j - 0.5 * (len(stages) - 1)) * width
+            ax.bar(x + offset, value, width, label=label, color=f"C{k}")  # a stage's colour
+        ax.set_ylabel(ylabel)
+        ax.axhline(0.0, color="k", lw=0.5)
+        ax.legend(fontsize=7)
     labels = [
         next(
             f"{r['variant']}\n{textwrap.fill(r['value'], 20)}"
@@ -221,11 +231,8 @@ def plot_parameter_study(rows: list[dict[str, Any]], path: Path, comm: MPI.Comm)
         )
         for n in names
     ]
-    ax.set_xticks(x, labels, fontsize=7)
-    ax.set_ylabel("settlement gained in the stage [mm]")
-    ax.set_title("one-at-a-time parameter study (legend: stages of the base case)")
-    ax.axhline(0.0, color="k", lw=0.5)
-    ax.legend(fontsize=7)
+    bottom.set_xticks(x, labels, fontsize=7)
+    top.set_title("one-at-a-time parameter study (legend: stages of the base case)")
     fig.tight_layout()
     fig.savefig(path, dpi=120)
     plt.close(fig)

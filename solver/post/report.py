@@ -227,6 +227,13 @@ def format_stabilisation(stages: list[dict]) -> list[str]:
     ]
 
 
+def sustained_rate_mm_s(stage: dict[str, Any]) -> float:
+    """A stage's sustained settlement rate: its gain over its second half over that half's
+    duration [mm/s] (``stage_summary``; the first half also holds the event in which the joint
+    settles to the depth that holds the new excitation)."""
+    return 2 * stage["gained_second_half_mm"] / (stage["end_s"] - stage["start_s"])
+
+
 def rate_ratio(rate: float, control_rate: float) -> float:
     """A settlement rate over the control's [-]: inf where only the first settles, 0 where
     neither does."""
@@ -250,8 +257,7 @@ def frequency_selectivity(stages: list[dict], excitations) -> list[dict[str, flo
     roles = {k + 1: e for k, e in enumerate(excitations)}
 
     def rates(s: dict) -> tuple[float, float]:
-        half = 0.5 * (s["end_s"] - s["start_s"])
-        return s["gained_second_half_mm"] / half, s["gained_mm"] / (2 * half)
+        return sustained_rate_mm_s(s), s["gained_mm"] / (s["end_s"] - s["start_s"])
 
     controls = [s for s in stages if s["stage"] in roles and roles[s["stage"]].role == "control"]
     if not controls or not controls[0]["steps"]:

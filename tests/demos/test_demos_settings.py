@@ -246,6 +246,41 @@ def test_dismount_table_motion_and_separation():
     assert table[0]["static_force_end_N"] == 2e4 and table[1]["open_fraction_end"] == 1.0
 
 
+def test_parameter_study_summary_carries_the_sustained_rate():
+    """A variant's summary row per stage: its whole gain and its rate over the second half
+    (0.05 mm over 0.015 s = 3.333 mm/s), with the role of the stage's excitation."""
+    from types import SimpleNamespace
+
+    from solver.installation.parameter_study import SUMMARY_COLUMNS, summary_rows, variants
+
+    stages = [
+        {
+            "stage": k,
+            "name": name,
+            "frequency_Hz": f,
+            "amplitude_N": 3600.0,
+            "start_s": t0,
+            "end_s": t1,
+            "settlement_start_mm": 0.0,
+            "settlement_end_mm": gain,
+            "gained_mm": gain,
+            "gained_second_half_mm": half,
+            "stick_slip_events": 1,
+            "steps": 10,
+            "wall_s": 1.0,
+        }
+        for k, name, f, t0, t1, gain, half in [
+            (0, "self-weight", 0.0, 0.0, 2.1, 2.5, 0.9),
+            (1, "vibration 1", 99.65, 2.1, 2.13, 0.6, 0.05),
+        ]
+    ]
+    rows = summary_rows(variants(0.08)[0], stages, [SimpleNamespace(role="control")], "done")
+    assert all(list(r) == SUMMARY_COLUMNS for r in rows)
+    assert [r["role"] for r in rows] == ["self-weight", "control"]
+    assert rows[1]["gained_mm"] == 0.6
+    assert rows[1]["sustained_rate_mm_s"] == pytest.approx(0.05 / 0.015)
+
+
 def test_parameter_study_varies_one_thing_at_a_time():
     from solver.installation.parameter_study import select, variants
 

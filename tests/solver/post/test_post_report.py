@@ -16,6 +16,7 @@ from solver.post.report import (
     stabilised,
     stage_summary,
     stick_slip_events,
+    sustained_rate_mm_s,
 )
 
 
@@ -58,6 +59,13 @@ def test_stage_summary_gains_start_from_the_previous_stage():
     assert s["gained_mm"] == pytest.approx(0.7)
     assert s["gained_second_half_mm"] == pytest.approx(0.1)  # s(2.05) - s(2.025) = 3.7 - 3.6
     assert s["gained_last_20pct_mm"] == pytest.approx(0.1)  # s(2.05) - s(2.04)
+
+
+def test_sustained_rate_is_the_second_half_gain_over_its_duration():
+    """0.02 mm over the second half (0.015 s) of a 0.03 s stage: 1.333 mm/s, whatever the first
+    half gained."""
+    s = _stage(1, 100.0, 2.1, 2.13, 0.6, second_half=0.02)
+    assert sustained_rate_mm_s(s) == pytest.approx(0.02 / 0.015)
 
 
 def test_rates_compare_stages_of_different_lengths():
