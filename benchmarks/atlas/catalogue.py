@@ -278,7 +278,6 @@ def _continued_rows(
     t, settlement = np.array(c["rows"])[:, :2].T
     duration = t[-1] - t[0]
     fifths = np.interp(np.linspace(t[0], t[-1], 6), t, settlement)
-    half = settlement[-1] - np.interp(t[0] + duration / 2, t, settlement)
     return [
         Row(
             f"probe: {_stage_label(s, excitations[s['stage'] - 1])}, continued from the state "
@@ -286,7 +285,7 @@ def _continued_rows(
             "running on): does its event stop? (§5.2)",
             f"gained {1e3 * (settlement[-1] - settlement[0]):.1f} um more ("
             + ", ".join(f"{1e3 * g:.1f}" for g in np.diff(fifths))
-            + f" um per {1e3 * duration / 5:.0f} ms), {2 * half / duration:.3f} mm/s over its "
+            + f" um per {1e3 * duration / 5:.0f} ms), {sustained_rate(c['rows']):.3f} mm/s over its "
             f"second half against {report.sustained_rate_mm_s(s):.3f} mm/s over the stage's; "
             f"{c['step_cuts']} step cut(s)",
             "measured",

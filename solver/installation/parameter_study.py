@@ -87,8 +87,8 @@ def summary_rows(
     """One row per stage of a variant's run (``Installation.stages``), with the role of each
     vibration stage (modal / control / ...) from ``Installation.excitations`` and its sustained
     rate (``solver.post.report.sustained_rate_mm_s``; a stage's whole gain also holds the event
-    in which the joint settles to the depth that holds the new excitation, largest in the first
-    vibration stage)."""
+    in which the joint settles to the depth that holds the new excitation, and the first
+    vibration stage's also the joint's first settling under vibration)."""
     roles = ["self-weight"] + [e.role for e in excitations]
     return [
         {

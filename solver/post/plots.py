@@ -221,7 +221,8 @@ def plot_parameter_study(rows: list[dict[str, Any]], path: Path, comm: MPI.Comm)
             ax.bar(x + offset, value, width, label=label, color=f"C{k}")  # a stage's colour
         ax.set_ylabel(ylabel)
         ax.axhline(0.0, color="k", lw=0.5)
-        ax.legend(fontsize=7)
+        if len(stages):
+            ax.legend(fontsize=7)
     labels = [
         next(
             f"{r['variant']}\n{textwrap.fill(r['value'], 20)}"
