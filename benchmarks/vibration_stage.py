@@ -6,7 +6,9 @@ starts from the installed state of an installation run (``--installed RUN``; wit
 the state that run kept after its stage N), then
 runs ``--steps`` steps of a stage at ``--frequency`` with the case's forcing, direction and
 vibration scheme and the amplitude ``--amplitude`` (N, or "eccentric": the motors' 0.3632 f^2 N).
-A restored state must have been written with the same case and overrides. Prints per step the wall time, Newton
+A restored state must have been written with the same case and overrides (``--set``);
+``--stage-set`` overrides apply to the stage only, from a settled state of ``--checkpoint``
+(e.g. the step or the friction law of the stage, for a convergence study). Prints per step the wall time, Newton
 and GMRES iterations, factorisations and the residual norms of the Newton iterations; then the
 mean per step, its ratio to one triangular solve with the zone's factors and the phase
 breakdown (``benchmarks/phase_timer.py``).
@@ -18,6 +20,8 @@ breakdown (``benchmarks/phase_timer.py``).
         --steps 12 --installed output/install
     mpirun -n 2 python benchmarks/vibration_stage.py --frequency 149.63 --amplitude 3600 \\
         --steps 240 --installed output/install --stage 3   # run with output.stage_states=true
+    mpirun -n 2 python benchmarks/vibration_stage.py --steps 224 --checkpoint output/settled \\
+        --stage-set time.steps_per_period=32
 """
 
 import argparse
@@ -46,6 +50,14 @@ def main(argv=None) -> int:
     p.add_argument(
         "--set", action="append", default=[], metavar="TABLE.KEY=VALUE", help="case override"
     )
+    p.add_argument(
+        "--stage-set",
+        action="append",
+        default=[],
+        metavar="TABLE.KEY=VALUE",
+        help="case override of the stage only (e.g. time.steps_per_period, "
+        "contact.lagged_friction): the settled state of --checkpoint is the one of --set",
+    )
     p.add_argument("--frequency", type=float, default=68.0, help="forcing frequency [Hz]")
     p.add_argument("--amplitude", default="eccentric", help='force amplitude [N] or "eccentric"')
     p.add_argument("--steps", type=int, default=16, help="time steps of the stage")
@@ -72,10 +84,17 @@ def main(argv=None) -> int:
         p.error("--frequency and --steps must be positive")
     if a.stage is not None and a.installed is None:
         p.error("--stage needs --installed")
+    if a.stage_set and (
+        a.installed is not None or not (a.checkpoint and Path(a.checkpoint).exists())
+    ):
+        p.error("--stage-set needs the settled state of an existing --checkpoint")
     amplitude = a.amplitude if a.amplitude == "eccentric" else float(a.amplitude)
     comm = MPI.COMM_WORLD
     say = print if comm.rank == 0 else (lambda *args, **kw: None)
-    case = InstallationCase.from_dict(read_case(a.case, a.set))
+    try:
+        case = InstallationCase.from_dict(read_case(a.case, a.set + a.stage_set))
+    except (ValueError, FileNotFoundError) as err:
+        p.error(str(err))
     if a.installed is not None:
         try:
             model = restore_installed(comm, a.case, a.set, a.installed, a.stage)[0]

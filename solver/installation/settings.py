@@ -55,7 +55,8 @@ class ContactSettings:
     condense_bulk: bool = False
     #: nonlinear solver of a step: "zone" (generalized Newton on the contact zone,
     #: solver.dynamics.newton) or "points" (Newton on the contact points' tractions,
-    #: solver.dynamics.point_newton; needs lagged_friction)
+    #: solver.dynamics.point_newton; without lagged_friction, mu follows the outer iterate's slip
+    #: speed: a fixed point)
     solver: str = "zone"
     #: "points": slave points within this gap of the master [m] are candidates from the start
     candidate_gap: float = 2e-6
@@ -83,10 +84,6 @@ class ContactSettings:
             )
         _check_choice("lu_solver", self.lu_solver, ("auto", "mumps", "superlu_dist"))
         _check_choice("solver", self.solver, ("zone", "points"))
-        if self.solver == "points" and not self.lagged_friction:
-            raise ValueError(
-                'solver = "points" needs lagged_friction = true (mu fixed within a step)'
-            )
         if not self.candidate_gap >= 0:
             raise ValueError(f"candidate_gap must be >= 0 m, got {self.candidate_gap}")
         if self.lu_solver != "auto" and not PETSc.Sys.hasExternalPackage(self.lu_solver):

@@ -48,10 +48,6 @@ def test_presets_are_valid_installation_cases():
         ("contact.lu_solver=umfpack", ["lu_solver", "superlu_dist"]),
         ("contact.condense_bulk=yes", ["condense_bulk", "true or false"]),
         ('contact.solver="newton"', ["solver", "zone", "points"]),
-        (
-            'contact.solver="points" contact.lagged_friction=false',
-            ["points", "lagged_friction"],
-        ),
         ("contact.candidate_gap=-1e-6", ["candidate_gap"]),
         ("contact.quadrature_degree=-1", ["quadrature_degree"]),
         ("output.checkpoint_every=0", ["checkpoint_every"]),
