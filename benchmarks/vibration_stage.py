@@ -64,7 +64,8 @@ def main(argv=None) -> int:
     p.add_argument(
         "--checkpoint",
         default=None,
-        help="folder of the settled state: restored if it exists, else written after settling",
+        help="folder of the settled state: restored if it exists, else written after settling "
+        "(--stage-set needs it to exist)",
     )
     p.add_argument(
         "--installed",

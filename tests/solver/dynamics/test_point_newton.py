@@ -234,9 +234,10 @@ def _installation_steps(case, vibration_steps: int) -> tuple[float, np.ndarray, 
 def test_points_solver_matches_zone_newton(quick_case):
     """mu lagged by a step, or at the step's own slip speed (the zone Newton with mu's
     derivative, the points solver by a fixed point in its outer iteration); d_c = 5 s/m makes
-    mu vary over the TP's slip speeds, so that the two laws give different solutions. Both
-    solvers stop at ||R|| <= 1e-7 ||b||, which at these steps allows residuals of about 1 N:
-    the settlements agree to 1e-5, a hundredth of the two laws' difference."""
+    mu vary over the TP's slip speeds, so that the two laws give different solutions (measured:
+    3.12816 against 3.13129 mm, 1.0e-3 apart). Both solvers stop at ||R|| <= 1e-7 ||b||, which
+    at these steps allows residuals of up to about 1 N; lagged they agree to 7e-8 (tested to
+    1e-6), with the fixed point in mu to 6.1e-6 (tested to 1e-5)."""
     settlement = {}
     for lagged in ("true", "false"):
         overrides = (
@@ -252,7 +253,8 @@ def test_points_solver_matches_zone_newton(quick_case):
             f"({zone[2]} iterations), points {points[0]:.9f} mm ({points[2]} iterations)"
         )
         assert zone[0] > 0.1
-        assert points[0] == pytest.approx(zone[0], rel=1e-5)
-        assert np.linalg.norm(points[1] - zone[1]) <= 1e-5 * np.linalg.norm(zone[1])
+        rtol = 1e-6 if lagged == "true" else 1e-5
+        assert points[0] == pytest.approx(zone[0], rel=rtol)
+        assert np.linalg.norm(points[1] - zone[1]) <= rtol * np.linalg.norm(zone[1])
         settlement[lagged] = points[0]
     assert abs(settlement["true"] - settlement["false"]) > 1e-3 * settlement["true"]
