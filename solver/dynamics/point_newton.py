@@ -44,7 +44,13 @@ from solver.dynamics.newton import NewtonResult
 from solver.dynamics.residual import contact_residual, dirichlet_rows
 from solver.dynamics.traction_jacobian import TractionJacobian
 
-__all__ = ["PointNewtonSolver", "TractionSolution", "solve_tractions", "stick_restart"]
+__all__ = [
+    "CoefficientRelaxation",
+    "PointNewtonSolver",
+    "TractionSolution",
+    "solve_tractions",
+    "stick_restart",
+]
 
 
 @dataclass
@@ -174,6 +180,57 @@ def solve_tractions(
     return TractionSolution(y, lam_y, iteration, False)
 
 
+class CoefficientRelaxation:
+    """Aitken relaxation of the fixed point in the friction coefficients of the outer iteration
+    (mu at the iterate's slip speed): the inner problem of iteration k takes
+
+        mu_k = mu_{k-1} + omega_k r_k,   r_k = mu(u_k) - mu_{k-1},
+        omega_k = -omega_{k-1} r_{k-1} . (r_k - r_{k-1}) / |r_k - r_{k-1}|^2   (omega_1 = 1),
+
+    clipped to [``omega_min``, ``omega_max``] and the coefficients to the law's range [``low``,
+    ``high``]. A linear fixed point of rate c then takes omega = 1 / (1 - c) after two
+    iterations: velocity weakening feeds slip back into slip (c near 1 in a settling event).
+    With mu fixed (lagged), r = 0 and mu_k = mu(u_k). :meth:`reset` at other points.
+    ``moving``: the last call's |r| exceeded ``still`` at some point."""
+
+    def __init__(
+        self,
+        low: float,
+        high: float,
+        omega_min: float = 0.1,
+        omega_max: float = 20.0,
+        still: float = 1e-6,
+    ):
+        self.low, self.high = low, high
+        self.omega_min, self.omega_max, self.still = omega_min, omega_max, still
+        self.reset()
+
+    def reset(self) -> None:
+        """Forget the iterates (new points, or a new solve): the next call returns mu(u_k)."""
+        self._mu: npt.NDArray | None = None
+        self._r: npt.NDArray | None = None
+        self.omega = 1.0
+        self.moving = False
+
+    def __call__(self, mu: npt.NDArray) -> npt.NDArray:
+        """The coefficients for the inner problem, from those at the iterate, ``mu`` (np,)."""
+        if self._mu is None or len(self._mu) != len(mu):
+            self.reset()
+            self._mu = mu.copy()
+            return mu
+        r = mu - self._mu
+        self.moving = bool(np.abs(r).max(initial=0.0) > self.still)
+        if self._r is not None:
+            dr = r - self._r
+            denominator = float(dr @ dr)
+            if denominator > 0:
+                omega = -self.omega * float(self._r @ dr) / denominator
+                self.omega = min(max(omega, self.omega_min), self.omega_max)
+        self._r = r
+        self._mu = np.clip(self._mu + self.omega * r, self.low, self.high)
+        return self._mu
+
+
 class PointNewtonSolver:
     """Newton on the contact points for A u + r_c(u) = b (module docstring).
 
@@ -191,7 +248,9 @@ class PointNewtonSolver:
         pairing_rtol: G is recomputed when the candidates' master parts moved by more than this
             fraction since it was (or a candidate paired with another master facet).
         slow_contraction: G is also recomputed at the present pairing when the last outer
-            iteration, with a kept G, reduced ||R|| by less than this factor.
+            iteration, with a kept G, reduced ||R|| by less than this factor, unless the friction
+            coefficients moved (``CoefficientRelaxation.moving``: the slow rate is then that of
+            the fixed point in mu, which a new G does not change).
         look_ahead: when candidates are added, the facets within this multiple of
             ``candidate_gap`` are added as well.
     """
@@ -237,6 +296,7 @@ class PointNewtonSolver:
         #: the inner problem's linear solves; its factors are kept while the points are the same
         self.jacobian = TractionJacobian()
         self._last_y: npt.NDArray | None = None  # the last inner solution, while its points stay
+        self._relaxation: CoefficientRelaxation | None = None
         self.pairing_rtol, self.slow_contraction = pairing_rtol, slow_contraction
         self._candidates = np.zeros(0, dtype=np.int64)  # this rank's candidate points
         self.factorizations = 0  #: LU factorisations of A'
@@ -282,6 +342,8 @@ class PointNewtonSolver:
         """Other candidates: the inner problem's factors and last solution are dropped."""
         self.jacobian.reset()
         self._last_y = None
+        if self._relaxation is not None:
+            self._relaxation.reset()
 
     def _starts(
         self,
@@ -431,6 +493,11 @@ class PointNewtonSolver:
         inner: list[int] = []
         result: NewtonResult | None = None
         factorizations0 = self.factorizations
+        if self._relaxation is None:
+            law = contact.friction
+            self._relaxation = CoefficientRelaxation(*sorted((law.mu_s, law.mu_d)))
+        relaxation = self._relaxation
+        relaxation.reset()
         built = False
         for k in range(self.max_iterations + 1):
             norms.append(norm)
@@ -454,14 +521,18 @@ class PointNewtonSolver:
             t0 = time.perf_counter()
             self._update_points(contact)
             y_k, normal, mu, weight, M_b, master = self._gather_points(contact)
-            # a kept G that slowed the last iteration down is rebuilt at the present pairing
+            mu_inner = relaxation(mu)
+            # a kept G that slowed the last iteration down is rebuilt at the present pairing,
+            # unless the coefficients moved (the slow rate is then the fixed point's in mu)
             slow = k > 0 and not built and norm > self.slow_contraction * norms[-2]
+            slow = slow and not relaxation.moving
             G, built = self._compliance_matrix(M_b, weight, master, keep=not slow)
             r_zone.array[:] = F.array_r[self._zone_local]
             compliance.solve(r_zone, d_zone)
             timings["compliance"] += time.perf_counter() - t0
             t0 = time.perf_counter()
             self.jacobian.set_compliance(G)
+            # lambda_k: the multipliers of R_k; the inner problem at the relaxed coefficients
             _, law_k = _law(y_k, normal, mu)
             lam_k = law_k.vector(normal).ravel()
             y_free = (
@@ -469,13 +540,13 @@ class PointNewtonSolver:
                 - compliance.apply_E(d_zone, M_b)
                 + self.jacobian.times(lam_k, np.flatnonzero(law_k.active))
             )
-            for y0 in self._starts(y_k, y_free, normal, mu):
+            for y0 in self._starts(y_k, y_free, normal, mu_inner):
                 solution = solve_tractions(
                     G,
                     y_free,
                     y0,
                     normal,
-                    mu,
+                    mu_inner,
                     self.traction_rtol,
                     self.traction_iterations,
                     jacobian=self.jacobian,

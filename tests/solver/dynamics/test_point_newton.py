@@ -8,6 +8,9 @@
   derivative, updated for a few points opening and closing and renewed for another active set.
 - The compliance G of ``ContactCompliance`` (blocks once per operator, the master part per
   pairing) against E A'^-1 F^T W formed densely on the tiny joint's condensed zone.
+- The Aitken relaxation of the fixed point in the friction coefficients against linear fixed
+  points: exact after three iterations for one rate, far fewer iterations than the plain fixed
+  point for rates that differ between points; a fixed coefficient passes through.
 - The installation steps of the quick frictional joint (self-weight ramp, then eccentric
   vibration steps) with ``[contact] solver = "points"`` against the generalized Newton on the
   zone, with the friction coefficient lagged by a step and at the step's own slip speed: the
@@ -27,7 +30,7 @@ from petsc4py import PETSc
 from solver.contact.model import Status
 from solver.dynamics.compliance import ContactCompliance
 from solver.dynamics.loads import Schedule
-from solver.dynamics.point_newton import solve_tractions
+from solver.dynamics.point_newton import CoefficientRelaxation, solve_tractions
 from solver.dynamics.traction_jacobian import TractionJacobian
 from solver.dynamics.time_loop import run
 from solver.installation.model import attach_vibration, set_up_joint_model
@@ -204,6 +207,42 @@ def _compare_with_dense(compliance, ops, A_zone, zone_dofs) -> None:
     reference = E @ np.linalg.solve(A_dense, F.T * W)
     assert G.shape == reference.shape == (3 * compliance.points, 3 * compliance.points)
     assert np.abs(G - reference).max() <= 1e-8 * np.abs(reference).max()
+
+
+def _relaxed_iterations(rate: np.ndarray, fixed: np.ndarray, relax: bool, tol=1e-12) -> int:
+    """Iterations of mu_k = mu(u_k) for the linear map mu(u_k) = fixed + rate (mu_{k-1} - fixed)
+    (the coefficients at the iterate of an inner problem with mu_{k-1}) until |mu - fixed| <= tol,
+    through ``CoefficientRelaxation`` or plainly."""
+    relaxation = CoefficientRelaxation(0.0, 1.0)
+    mu = np.full_like(fixed, 0.5)
+    for k in range(1, 1000):
+        at_iterate = fixed + rate * (mu - fixed)
+        mu = relaxation(at_iterate) if relax else at_iterate
+        if np.abs(mu - fixed).max() <= tol:
+            return k
+    return 1000
+
+
+def test_coefficient_relaxation_accelerates_the_fixed_point():
+    """Velocity weakening feeds slip back into slip: the fixed point's rate is near 1 in an
+    event. One rate (0.95): the plain iteration needs log(1e-12 / 0.1) / log(0.95) = 490
+    iterations, the relaxation 3 (omega = 1 / (1 - c) from the second). Rates 0.5-0.95 between
+    points: at most a fifth of the plain count (measured 51 against 367)."""
+    rng = np.random.default_rng(1)
+    fixed = rng.uniform(0.4, 0.45, 50)
+    one_rate = np.full(50, 0.95)
+    assert _relaxed_iterations(one_rate, fixed, relax=False) > 400
+    assert _relaxed_iterations(one_rate, fixed, relax=True) == 3
+    rates = rng.uniform(0.5, 0.95, 50)
+    plain = _relaxed_iterations(rates, fixed, relax=False)
+    assert _relaxed_iterations(rates, fixed, relax=True) <= plain / 5
+    relaxation = CoefficientRelaxation(0.4, 0.5)  # mu fixed within the step: passed through
+    for _ in range(3):
+        assert np.array_equal(relaxation(fixed), fixed)
+    relaxation.reset()
+    relaxation(np.full(3, 0.45))
+    assert np.all(relaxation(np.full(3, 0.41)) >= 0.4)  # within the law's range
+    assert len(relaxation(np.full(5, 0.45))) == 5  # other points: restarted
 
 
 def _installation_steps(case, vibration_steps: int) -> tuple[float, np.ndarray, list[int]]:
