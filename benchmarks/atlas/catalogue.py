@@ -85,7 +85,12 @@ class Context:
             f"`{self.case_name}` {' '.join(self.overrides)}: {c.mesh.n_circumferential} around, "
             f"{1e3 * c.mesh.axial_size:g} mm axially ({1e3 * c.mesh.contact_axial_size:g} mm in "
             f"the contact zone, {1e3 * c.mesh.contact_zone_above:g} mm above the TP's lower "
-            f"edge), degree {c.contact.degree}"
+            f"edge), degree {c.contact.degree}, mu at the "
+            + (
+                "previous step's slip speed"
+                if c.contact.lagged_friction
+                else "step's own slip speed"
+            )
         ).replace("` :", "`:")
 
     def self_weight(
