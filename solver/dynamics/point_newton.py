@@ -26,7 +26,6 @@ recomputes the compliance blocks.
 
 import time
 from collections.abc import Sequence
-from dataclasses import dataclass
 from typing import cast
 
 import numpy as np
@@ -36,199 +35,16 @@ from petsc4py import PETSc
 
 import dolfinx
 
-from solver.contact.law import Multipliers, derivative, multipliers
 from solver.contact.model import ContactModel, Status
 from solver.contact.nitsche import NitscheContact
 from solver.dynamics.compliance import ContactCompliance
 from solver.dynamics.newton import NewtonResult
+from solver.dynamics.relaxation import CoefficientRelaxation
 from solver.dynamics.residual import contact_residual, dirichlet_rows
 from solver.dynamics.traction_jacobian import TractionJacobian
+from solver.dynamics.tractions import pointwise_law, solve_tractions, traction_residual
 
-__all__ = [
-    "CoefficientRelaxation",
-    "PointNewtonSolver",
-    "TractionSolution",
-    "solve_tractions",
-    "stick_restart",
-]
-
-
-@dataclass
-class TractionSolution:
-    """Outcome of :func:`solve_tractions`: the trial tractions y [Pa], the multipliers
-    lambda(y) [Pa] (both 3 per point), the iterations and whether ||Phi|| met the tolerance."""
-
-    y: npt.NDArray
-    multipliers: npt.NDArray
-    iterations: int
-    converged: bool
-
-
-def _law(y: npt.NDArray, normal: npt.NDArray, mu: npt.NDArray):
-    """The pointwise law at trial tractions y (3 per point): P_t and the multipliers."""
-    P = y.reshape(-1, 3)
-    P_n = np.einsum("pi,pi->p", P, normal)
-    P_t = P - P_n[:, None] * normal
-    return P_t, multipliers(P_n, P_t, mu)
-
-
-def _residual(
-    jacobian: TractionJacobian,
-    y: npt.NDArray,
-    y_free: npt.NDArray,
-    normal: npt.NDArray,
-    mu: npt.NDArray,
-) -> tuple[npt.NDArray, Multipliers, npt.NDArray, npt.NDArray]:
-    """Phi(y) = y - y_free + G lambda(y) [Pa] with the jacobian's G, and P_t and the multipliers
-    at y (as ``_law``; lambda also as a vector, 3 per point)."""
-    P_t, lam = _law(y, normal, mu)
-    lam_y = lam.vector(normal).ravel()
-    return P_t, lam, lam_y, y - y_free + jacobian.times(lam_y, np.flatnonzero(lam.active))
-
-
-def stick_restart(y: npt.NDArray, normal: npt.NDArray, mu: npt.NDArray) -> npt.NDArray:
-    """The trial tractions y (3 per point) [Pa] with each slipping point's tangential part pulled
-    just inside its friction disk (radius mu p, p = -P_n > 0): those points become stuck."""
-    P = y.reshape(-1, 3)
-    P_n = np.einsum("pi,pi->p", P, normal)
-    P_t = P - P_n[:, None] * normal
-    radius = np.linalg.norm(P_t, axis=1)
-    limit = mu * np.maximum(-P_n, 0.0)
-    slipping = (P_n < 0) & (radius > limit)
-    scale = np.ones_like(radius)
-    scale[slipping] = (1.0 - 1e-3) * limit[slipping] / radius[slipping]
-    return (P_n[:, None] * normal + scale[:, None] * P_t).ravel()
-
-
-def solve_tractions(
-    G: npt.NDArray,
-    y_free: npt.NDArray,
-    y0: npt.NDArray,
-    normal: npt.NDArray,
-    mu: npt.NDArray,
-    rtol: float = 1e-12,
-    max_iterations: int = 60,
-    max_backtracks: int = 12,
-    jacobian: TractionJacobian | None = None,
-    restarts: int = 2,
-) -> TractionSolution:
-    """Solve Phi(y) = y - y_free + G lambda(y) = 0 for the trial tractions y [Pa] of points with
-    normals ``normal`` (np, 3) and friction coefficients ``mu`` (np,), from y0.
-
-    Semismooth Newton: (I + G D) dy = -Phi with D = d lambda / d y (``solver.contact.law``), whose
-    columns vanish at open points, so that only the active points' block is solved
-    (``solver.dynamics.traction_jacobian``); the step is halved while ||Phi|| does not decrease.
-    Where no step decreases ||Phi|| (the slip law's derivative does not see a point that should
-    stick: Newton stalls with every point slipping), the iteration restarts from
-    :func:`stick_restart` of its iterate, at most ``restarts`` times. Converged when
-    ||Phi|| <= rtol max(||y_free||, ||y||) (infinity norms). ``jacobian``: kept by the caller
-    between calls for the same points, so that its factors are reused.
-    """
-    if jacobian is None:
-        jacobian = TractionJacobian()
-    jacobian.set_compliance(G)
-
-    def evaluate(y: npt.NDArray):
-        return _residual(jacobian, y, y_free, normal, mu)
-
-    y = y0.copy()
-    P_t, lam, lam_y, phi = evaluate(y)
-    norm = float(np.linalg.norm(phi))
-    scale = max(np.abs(y_free).max(initial=0.0), np.abs(y).max(initial=0.0), 1.0)
-    for iteration in range(max_iterations + 1):
-        if np.abs(phi).max(initial=0.0) <= rtol * scale:
-            return TractionSolution(y, lam_y, iteration, True)
-        if iteration == max_iterations:
-            break
-        active = np.flatnonzero(lam.active)
-        dy = -phi
-        if active.size:
-            D = derivative(
-                normal[active],
-                P_t[active],
-                mu[active],
-                -lam.normal[active],
-                lam.stick[active],
-                lam.slip[active],
-            )
-            dy = jacobian.direction(active, D, phi)
-        alpha, accepted = 1.0, False
-        for _ in range(max_backtracks + 1):
-            trial = y + alpha * dy
-            P_t_trial, lam_trial, lam_trial_y, phi_trial = evaluate(trial)
-            norm_trial = float(np.linalg.norm(phi_trial))
-            if norm_trial < (1.0 - 1e-4 * alpha) * norm:
-                accepted = True
-                break
-            alpha *= 0.5
-        if not accepted:
-            if restarts == 0:
-                break
-            restarts -= 1
-            y = stick_restart(y, normal, mu)
-            P_t, lam, lam_y, phi = evaluate(y)
-            norm = float(np.linalg.norm(phi))
-            continue
-        y, P_t, lam, lam_y, phi, norm = (
-            trial,
-            P_t_trial,
-            lam_trial,
-            lam_trial_y,
-            phi_trial,
-            norm_trial,
-        )
-    return TractionSolution(y, lam_y, iteration, False)
-
-
-class CoefficientRelaxation:
-    """Aitken relaxation of the fixed point in the friction coefficients of the outer iteration
-    (mu at the iterate's slip speed): the inner problem of iteration k takes
-
-        mu_k = mu_{k-1} + omega_k r_k,   r_k = mu(u_k) - mu_{k-1},
-        omega_k = -omega_{k-1} r_{k-1} . (r_k - r_{k-1}) / |r_k - r_{k-1}|^2   (omega_1 = 1),
-
-    clipped to [``omega_min``, ``omega_max``] and the coefficients to the law's range [``low``,
-    ``high``]. A linear fixed point of rate c then takes omega = 1 / (1 - c) after two
-    iterations: velocity weakening feeds slip back into slip (c near 1 in a settling event).
-    With mu fixed (lagged), r = 0 and mu_k = mu(u_k). :meth:`reset` at other points.
-    ``moving``: the last call's |r| exceeded ``still`` at some point."""
-
-    def __init__(
-        self,
-        low: float,
-        high: float,
-        omega_min: float = 0.1,
-        omega_max: float = 20.0,
-        still: float = 1e-6,
-    ):
-        self.low, self.high = low, high
-        self.omega_min, self.omega_max, self.still = omega_min, omega_max, still
-        self.reset()
-
-    def reset(self) -> None:
-        """Forget the iterates (new points, or a new solve): the next call returns mu(u_k)."""
-        self._mu: npt.NDArray | None = None
-        self._r: npt.NDArray | None = None
-        self.omega = 1.0
-        self.moving = False
-
-    def __call__(self, mu: npt.NDArray) -> npt.NDArray:
-        """The coefficients for the inner problem, from those at the iterate, ``mu`` (np,)."""
-        if self._mu is None or len(self._mu) != len(mu):
-            self.reset()
-            self._mu = mu.copy()
-            return mu
-        r = mu - self._mu
-        self.moving = bool(np.abs(r).max(initial=0.0) > self.still)
-        if self._r is not None:
-            dr = r - self._r
-            denominator = float(dr @ dr)
-            if denominator > 0:
-                omega = -self.omega * float(self._r @ dr) / denominator
-                self.omega = min(max(omega, self.omega_min), self.omega_max)
-        self._r = r
-        self._mu = np.clip(self._mu + self.omega * r, self.low, self.high)
-        return self._mu
+__all__ = ["PointNewtonSolver"]
 
 
 class PointNewtonSolver:
@@ -363,7 +179,7 @@ class PointNewtonSolver:
         last = y_k.copy()
         last[: len(self._last_y)] = self._last_y
         phi_k, phi_last = (
-            np.abs(_residual(self.jacobian, y, y_free, normal, mu)[3]).max(initial=0.0)
+            np.abs(traction_residual(self.jacobian, y, y_free, normal, mu)[3]).max(initial=0.0)
             for y in (y_k, last)
         )
         return [last, y_k, y_free] if phi_last < phi_k else [y_k, last, y_free]
@@ -533,7 +349,7 @@ class PointNewtonSolver:
             t0 = time.perf_counter()
             self.jacobian.set_compliance(G)
             # lambda_k: the multipliers of R_k; the inner problem at the relaxed coefficients
-            _, law_k = _law(y_k, normal, mu)
+            _, law_k = pointwise_law(y_k, normal, mu)
             lam_k = law_k.vector(normal).ravel()
             y_free = (
                 y_k

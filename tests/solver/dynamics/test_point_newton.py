@@ -1,4 +1,4 @@
-"""Newton on the contact points (solver/dynamics/point_newton.py, solver/dynamics/compliance.py).
+"""Newton on the contact points (solver/dynamics/: point_newton, tractions, relaxation, compliance).
 
 - The inner problem y - y_free + G lambda(y) = 0 for uncoupled points (G = g I per point) against
   its closed form (open, stick, slip); a recorded problem where Newton stalls with every point
@@ -30,7 +30,8 @@ from petsc4py import PETSc
 from solver.contact.model import Status
 from solver.dynamics.compliance import ContactCompliance
 from solver.dynamics.loads import Schedule
-from solver.dynamics.point_newton import CoefficientRelaxation, solve_tractions
+from solver.dynamics.relaxation import CoefficientRelaxation
+from solver.dynamics.tractions import solve_tractions
 from solver.dynamics.traction_jacobian import TractionJacobian
 from solver.dynamics.time_loop import run
 from solver.installation.model import attach_vibration, set_up_joint_model
