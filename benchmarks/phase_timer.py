@@ -118,7 +118,7 @@ class PhaseTimer:
         self._wrap(PN.ContactCompliance, "solve", "triangular solves")
         for name in ("extend", "matrix"):
             self._wrap(PN.ContactCompliance, name, "compliance")
-        self._wrap(PN, "solve_tractions", "tractions")
+        self._wrap(PN, "solve_tractions", "tractions")  # the name point_newton calls it by
         for name in ("__init__", "update", "reduce_load", "recover"):
             self._wrap(solver.dynamics.condensation.BulkCondensation, name, "condensation")
         for name in ("_effective_load", "_evaluate_load", "_assemble_operator"):

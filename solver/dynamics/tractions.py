@@ -36,8 +36,12 @@ class TractionSolution:
     converged: bool
 
 
-def pointwise_law(y: npt.NDArray, normal: npt.NDArray, mu: npt.NDArray):
-    """The pointwise law at trial tractions y (3 per point): P_t and the multipliers."""
+def pointwise_law(
+    y: npt.NDArray, normal: npt.NDArray, mu: npt.NDArray
+) -> tuple[npt.NDArray, Multipliers]:
+    """The pointwise law at trial tractions y (3 per point) [Pa], unit normals (np, 3) and
+    coefficients mu (np,) [-]: the tangential trial tractions P_t (np, 3) [Pa] and the
+    multipliers."""
     P = y.reshape(-1, 3)
     P_n = np.einsum("pi,pi->p", P, normal)
     P_t = P - P_n[:, None] * normal
@@ -100,7 +104,7 @@ def solve_tractions(
         jacobian = TractionJacobian()
     jacobian.set_compliance(G)
 
-    def evaluate(y: npt.NDArray):
+    def evaluate(y: npt.NDArray) -> tuple[npt.NDArray, Multipliers, npt.NDArray, npt.NDArray]:
         return traction_residual(jacobian, y, y_free, normal, mu)
 
     y = y0.copy()

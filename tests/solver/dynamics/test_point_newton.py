@@ -226,13 +226,13 @@ def _relaxed_iterations(rate: np.ndarray, fixed: np.ndarray, relax: bool, tol=1e
 
 def test_coefficient_relaxation_accelerates_the_fixed_point():
     """Velocity weakening feeds slip back into slip: the fixed point's rate is near 1 in an
-    event. One rate (0.95): the plain iteration needs log(1e-12 / 0.1) / log(0.95) = 490
-    iterations, the relaxation 3 (omega = 1 / (1 - c) from the second). Rates 0.5-0.95 between
+    event. One rate (0.9): the plain iteration needs log(1e-12 / 0.1) / log(0.9) = 240
+    iterations (241 counted), the relaxation 3 (omega = 1 / (1 - c) = 10 from the second). Rates 0.5-0.95 between
     points: at most a fifth of the plain count (measured 51 against 367)."""
     rng = np.random.default_rng(1)
     fixed = rng.uniform(0.4, 0.45, 50)
-    one_rate = np.full(50, 0.95)
-    assert _relaxed_iterations(one_rate, fixed, relax=False) > 400
+    one_rate = np.full(50, 0.9)
+    assert _relaxed_iterations(one_rate, fixed, relax=False) > 200
     assert _relaxed_iterations(one_rate, fixed, relax=True) == 3
     rates = rng.uniform(0.5, 0.95, 50)
     plain = _relaxed_iterations(rates, fixed, relax=False)
@@ -275,7 +275,7 @@ def test_points_solver_matches_zone_newton(quick_case):
     """mu lagged by a step, or at the step's own slip speed (the zone Newton with mu's
     derivative, the points solver by a fixed point in its outer iteration); d_c = 5 s/m makes
     mu vary over the TP's slip speeds, so that the two laws give different solutions (measured:
-    3.12816 against 3.13129 mm, 1.0e-3 apart). Both solvers stop at ||R|| <= 1e-7 ||b||, which
+    3.12816 against 3.13129 mm, 1.0e-3 apart; tested to 5e-4). Both solvers stop at ||R|| <= 1e-7 ||b||, which
     at these steps allows residuals of up to about 1 N; lagged they agree to 7e-8 (tested to
     1e-6), with the fixed point in mu to 6.1e-6 (tested to 1e-5)."""
     settlement = {}
@@ -297,4 +297,4 @@ def test_points_solver_matches_zone_newton(quick_case):
         assert points[0] == pytest.approx(zone[0], rel=rtol)
         assert np.linalg.norm(points[1] - zone[1]) <= rtol * np.linalg.norm(zone[1])
         settlement[lagged] = points[0]
-    assert abs(settlement["true"] - settlement["false"]) > 1e-3 * settlement["true"]
+    assert abs(settlement["true"] - settlement["false"]) > 5e-4 * settlement["true"]
