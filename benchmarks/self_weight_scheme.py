@@ -22,7 +22,6 @@ import numpy as np
 from mpi4py import MPI
 
 from common.case import read_case
-from solver.dynamics.time_loop import run
 from solver.installation.case import InstallationCase
 from solver.installation.model import set_up_joint_model
 from solver.post.report import slip_episodes
@@ -32,15 +31,7 @@ def self_weight(comm: MPI.Comm, case: InstallationCase) -> dict:
     """Run the self-weight stage of ``case`` from rest; its figures."""
     t0 = time.perf_counter()
     model = set_up_joint_model(comm, case)
-    sw = case.self_weight
-    rows = run(
-        model.problem,
-        sw.duration_s,
-        sw.dt_s,
-        dt_min=sw.dt_s * case.time.dt_min_fraction,
-        observers=[model.settlement],
-        progress=False,
-    )
+    rows = model.run_self_weight(observers=[model.settlement])
     t = np.array([r["time_s"] for r in rows])
     s = np.array([r["settlement_mm"] for r in rows])
     events = slip_episodes(t, s, 0.0, 0.0, 1, case.output.slip_rate_mm_s)
@@ -48,7 +39,7 @@ def self_weight(comm: MPI.Comm, case: InstallationCase) -> dict:
         "wall_s": time.perf_counter() - t0,
         "steps": len(rows),
         "newton": sum(r["newton_iterations"] for r in rows) / len(rows),
-        "ramp_mm": float(np.interp(sw.ramp_time_s, t, s)),
+        "ramp_mm": float(np.interp(case.self_weight.ramp_time_s, t, s)),
         "end_mm": float(s[-1]),
         "events": events,
     }

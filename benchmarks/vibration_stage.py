@@ -120,9 +120,8 @@ def main(argv=None) -> int:
         checkpoint.restore(a.checkpoint, problem)
         say(f"settled state restored from {a.checkpoint} (t = {problem.t:.3f} s)", flush=True)
     else:
-        sw = case.self_weight
         t0 = time.perf_counter()
-        run(problem, sw.ramp_time_s + sw.hold_s, sw.dt_s, progress=False)
+        model.run_self_weight()
         say(f"self-weight stage: {time.perf_counter() - t0:.1f} s", flush=True)
         if a.checkpoint is not None:
             checkpoint.save(a.checkpoint, problem, record)

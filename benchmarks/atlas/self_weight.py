@@ -17,7 +17,6 @@ from mpi4py import MPI
 from benchmarks.atlas.kept import keep_run, kept_run
 from common.case import read_case
 from solver.contact import Status
-from solver.dynamics.time_loop import run
 from solver.installation.case import InstallationCase
 from solver.installation.model import JointModel, set_up_joint_model, settled_modes
 from solver.modal.eigen import EigenOptions, modal_analysis
@@ -75,14 +74,7 @@ def self_weight_run(
     frequencies = {}
     end = sw.duration_s if until_s is None else until_s
     for t_end in sorted({*modes_at_s, end}):
-        run(
-            model.problem,
-            t_end,
-            sw.dt_s,
-            dt_min=sw.dt_s * case.time.dt_min_fraction,
-            observers=[observe],
-            progress=False,
-        )
+        model.run_self_weight(t_end, [observe])
         if t_end in modes_at_s:
             frequencies[f"{t_end:g}"] = settled_modes(model, N_MODES)[0].frequencies_hz.tolist()
     height = contact_height(model)

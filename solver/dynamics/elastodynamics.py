@@ -9,17 +9,19 @@ generalised-alpha, or quasi-static). Each step solves the effective system
 
     A u_{n+1} + r_c(u_{n+1}) = b,    A = K + c_M M + c_C C_Rayleigh,
 
-with a reused LU factorisation of A when there is no contact, and with
-``solver.dynamics.newton.solve_contact_problem`` (generalised Newton, LU of A + J_c reused
-across iterations and steps while dt is unchanged) when there is. The contact object is a
-``solver.contact.model.ContactModel``: ``NitscheContact`` (two bodies) or ``RigidPlaneContact``.
-Modal damping is low rank and enters b explicitly through the Newmark-predicted
-velocity v_n + (1 - alpha_f) dt a_n (error O(dt^2), see ``solver.dynamics.damping``).
+with a reused LU factorisation of A when there is no contact, and with a contact Newton
+solver (``CONTACT_SOLVERS``, its factorisations reused across iterations and steps) when there
+is; A and its factorisations are kept for the last ``operators_kept`` step sizes. The
+contact object is a ``solver.contact.model.ContactModel``: ``NitscheContact`` (two bodies)
+or ``RigidPlaneContact``. Modal damping is low rank and enters b explicitly through the
+Newmark-predicted velocity v_n + (1 - alpha_f) dt a_n (error O(dt^2), see
+``solver.dynamics.damping``).
 Dirichlet conditions must be homogeneous (clamped boundaries).
 """
 
 from collections.abc import Callable, Sequence
 from dataclasses import dataclass, field
+from typing import Any
 
 import numpy as np
 import ufl
@@ -74,13 +76,25 @@ class StepResult:
     message: str = ""
 
 
+@dataclass
+class _StepOperator:
+    """A at one step size dt [s] (None: values to be set) with its direct solver and, in a
+    contact problem, the bulk condensation and the contact Newton workspace built on it."""
+
+    A: PETSc.Mat
+    ksp: PETSc.KSP
+    dt: float | None = None
+    condensation: BulkCondensation | None = None
+    newton: Any = None  #: a ``CONTACT_SOLVERS`` solver on A (or on the condensed A_hat)
+
+
 class Elastodynamics:
     """State (u, v, a) at time t and the step u_n -> u_{n+1} of a Newmark-family scheme.
 
     Besides ``step``: ``state_arrays()`` / ``restore_state(t, arrays)`` save and restore
     everything a step depends on (checkpoints), ``refresh_load()`` re-evaluates f(t) after
     the load object changed, ``set_scheme(scheme)`` switches the time scheme and
-    ``reset_operator()`` drops the factorisation (the next step rebuilds it). ``last_result``
+    ``reset_operator()`` drops the factorisations (the next step rebuilds them). ``last_result``
     is the outcome of the last step attempted.
     """
 
@@ -97,7 +111,10 @@ class Elastodynamics:
         newton_options: dict | None = None,
         condense_bulk: bool = False,
         contact_solver: str = "zone",
+        operators_kept: int = 1,
     ):
+        if operators_kept < 1:
+            raise ValueError(f"operators_kept must be >= 1, got {operators_kept}")
         if condense_bulk and contact is None:
             raise ValueError(
                 "condense_bulk needs a contact object (the bulk is condensed away from its cells)"
@@ -111,14 +128,12 @@ class Elastodynamics:
         #: "zone": generalized Newton on the zone (solver.dynamics.newton); "points": Newton on
         #: the contact points' tractions (solver.dynamics.point_newton)
         self.contact_solver = contact_solver
-        self._condensation: BulkCondensation | None = None
         self.V, self.M, self.K, self.bcs = V, M, K, list(bcs)
         self.scheme, self.damping, self.contact = scheme, damping, contact
         self.load = load
         self.newton_options = dict(
             newton_options or {}
         )  #: options of solver.dynamics.newton.ContactNewtonSolver
-        self._newton = None
         self.u, self.v, self.a = (
             fem.Function(V, name=n) for n in ("displacement", "velocity", "acceleration")
         )
@@ -132,9 +147,11 @@ class Elastodynamics:
             None  #: contact status at the end of the last step (this rank's points)
         )
         self.last_result: StepResult | None = None  #: outcome of the last step attempted
-        self.A = K.duplicate(copy=True)
-        self._dt_of_A = None
-        self._ksp = direct_solver(V.mesh.comm, self.A, prefix="dynamics_")
+        #: step sizes whose operators (A and its factorisations) are kept at once (>= 1): two
+        #: let a loop alternate between a nominal and a finer step without refactorising
+        self.operators_kept = operators_kept
+        self._operators: list[_StepOperator] = []  # least recently used first
+        self._operator = self._new_operator()
         self._evaluate_load(0.0, self._f_old)
 
     def _homogeneous_bc_dofs(self) -> np.ndarray:
@@ -154,9 +171,35 @@ class Elastodynamics:
         if self.load is not None:
             self.load(t, out)
 
+    def _new_operator(self) -> _StepOperator:
+        A = self.K.duplicate(copy=True)
+        operator = _StepOperator(A, direct_solver(self.V.mesh.comm, A, prefix="dynamics_"))
+        self._operators.append(operator)
+        return operator
+
+    @property
+    def A(self) -> PETSc.Mat:
+        """The effective operator A = K + c_M M + c_C C of the last step size [N/m]."""
+        return self._operator.A
+
+    @property
+    def _condensation(self) -> BulkCondensation | None:
+        return self._operator.condensation
+
     def _assemble_operator(self, dt: float) -> None:
-        """A = K + c_M M + c_C (a M + b K), factorised lazily by the KSP."""
-        if self._dt_of_A == dt:
+        """Make A(dt) = K + c_M M + c_C (a M + b K) current: a kept one, else new values in the
+        least recently used (factorised lazily by the KSP and the contact solver)."""
+        kept = [op for op in self._operators if op.dt == dt]
+        if kept:
+            operator = kept[0]
+        elif len(self._operators) < self.operators_kept:
+            operator = self._new_operator()
+        else:
+            operator = self._operators[0]
+        self._operators.remove(operator)
+        self._operators.append(operator)
+        self._operator = operator
+        if operator.dt == dt:
             return
         c_M, c_C = self.scheme.coefficients(dt)
         a_R, b_R = (
@@ -164,36 +207,37 @@ class Elastodynamics:
             if isinstance(self.damping, RayleighDamping)
             else (0.0, 0.0)
         )
-        self.K.copy(self.A, structure=PETSc.Mat.Structure.SAME_NONZERO_PATTERN)
-        self.A.scale(1.0 + c_C * b_R)
-        self.A.axpy(c_M + c_C * a_R, self.M, structure=PETSc.Mat.Structure.SUBSET_NONZERO_PATTERN)
-        self._ksp.setOperators(self.A)
-        self._dt_of_A = dt
+        A = operator.A
+        self.K.copy(A, structure=PETSc.Mat.Structure.SAME_NONZERO_PATTERN)
+        A.scale(1.0 + c_C * b_R)
+        A.axpy(c_M + c_C * a_R, self.M, structure=PETSc.Mat.Structure.SUBSET_NONZERO_PATTERN)
+        operator.ksp.setOperators(A)
+        operator.dt = dt
         if self.contact is None:
             return
-        if self._newton is not None:  # the Newton workspace (an LU of A + J_c), for the new A
-            if self._condensation is not None:
-                self._condensation.update(self.A)
-                self._newton.set_operator(self._condensation.A_hat)
+        if operator.newton is not None:  # the Newton workspace (an LU of A + J_c), for the new A
+            if operator.condensation is not None:
+                operator.condensation.update(A)
+                operator.newton.set_operator(operator.condensation.A_hat)
             else:
-                self._newton.set_operator(self.A)
+                operator.newton.set_operator(A)
+            return
+        solver = CONTACT_SOLVERS[self.contact_solver]
+        if self.condense_bulk:
+            operator.condensation = BulkCondensation(
+                A,
+                self.V,
+                self.contact.support_cells,
+                lu_solver=self.newton_options.get("lu_solver", "mumps"),
+            )
+            operator.newton = solver(
+                operator.condensation.A_hat,
+                self.bcs,
+                zone=operator.condensation.zone,
+                **self.newton_options,
+            )
         else:
-            solver = CONTACT_SOLVERS[self.contact_solver]
-            if self.condense_bulk:
-                self._condensation = BulkCondensation(
-                    self.A,
-                    self.V,
-                    self.contact.support_cells,
-                    lu_solver=self.newton_options.get("lu_solver", "mumps"),
-                )
-                self._newton = solver(
-                    self._condensation.A_hat,
-                    self.bcs,
-                    zone=self._condensation.zone,
-                    **self.newton_options,
-                )
-            else:
-                self._newton = solver(self.A, self.bcs, **self.newton_options)
+            operator.newton = solver(A, self.bcs, **self.newton_options)
 
     def initialise(self, t0: float = 0.0) -> None:
         """Set t = t0 and the consistent initial acceleration M a0 = f(t0) - K u0 - C v0 - r_c(u0)."""
@@ -299,8 +343,9 @@ class Elastodynamics:
         self._effective_load(dt)
         u_old = self.u.x.array.copy()
         if self.contact is None:
-            self._ksp.solve(self._b, self.u.x.petsc_vec)
-            result = StepResult(converged=self._ksp.getConvergedReason() > 0)
+            ksp = self._operator.ksp
+            ksp.solve(self._b, self.u.x.petsc_vec)
+            result = StepResult(converged=ksp.getConvergedReason() > 0)
         else:
             self.contact.set_reference(self.u, dt)
             starts = self.initial_guesses(u_old, dt)
@@ -313,7 +358,7 @@ class Elastodynamics:
                 self.u.x.array[:] = start
                 if condensation is not None:
                     condensation.hold_bulk(self.u, b)
-                res = self._newton.solve(b, self.contact, self.u, load_norm=self._b.norm())
+                res = self._operator.newton.solve(b, self.contact, self.u, load_norm=self._b.norm())
                 iterations += res.iterations
                 if res.converged:
                     break
@@ -343,8 +388,9 @@ class Elastodynamics:
         self._evaluate_load(self.t, self._f_old)
 
     def reset_operator(self) -> None:
-        """Drop the factorisation and the Newton workspace: the next step starts afresh."""
-        self._dt_of_A = None
+        """Drop the factorisations and the Newton workspaces: the next step starts afresh."""
+        for operator in self._operators:
+            operator.dt = None
 
     def set_scheme(self, scheme: Scheme) -> None:
         """Integrate the following steps with ``scheme`` (the operator is rebuilt)."""

@@ -73,6 +73,7 @@ class PointNewtonSolver:
             the fixed point in mu, which a new G does not change).
         look_ahead: when candidates are added, the facets within this multiple of
             ``candidate_gap`` are added as well.
+        drop_after: a candidate is dropped after this many solves in a row far from the master.
     """
 
     def __init__(
@@ -90,6 +91,7 @@ class PointNewtonSolver:
         pairing_rtol: float = 1e-2,
         slow_contraction: float = 0.03,
         look_ahead: float = 4.0,
+        drop_after: int = 10,
     ):
         if max_iterations < 1:
             raise ValueError(f"max_iterations must be >= 1, got {max_iterations}")
@@ -99,11 +101,13 @@ class PointNewtonSolver:
             raise ValueError(f"candidate_gap must be >= 0 m, got {candidate_gap}")
         if not look_ahead >= 1:
             raise ValueError(f"look_ahead must be >= 1, got {look_ahead}")
+        if not drop_after >= 1:
+            raise ValueError(f"drop_after must be >= 1, got {drop_after}")
         self.A, self.bcs = A, bcs
         self.rtol, self.atol, self.max_iterations = rtol, atol, max_iterations
         self.lu_solver = lu_solver
         self.candidate_gap = candidate_gap
-        self.look_ahead = look_ahead
+        self.look_ahead, self.drop_after = look_ahead, drop_after
         self.traction_rtol, self.traction_iterations = traction_rtol, traction_iterations
         self._comm: MPI.Comm = A.getComm().tompi4py()
         self._bc_rows, self._bc_local = dirichlet_rows(bcs)
@@ -119,6 +123,7 @@ class PointNewtonSolver:
         self._relaxation: CoefficientRelaxation | None = None
         self.pairing_rtol, self.slow_contraction = pairing_rtol, slow_contraction
         self._candidates = np.zeros(0, dtype=np.int64)  # this rank's candidate points
+        self._far_solves = np.zeros(0, dtype=np.int64)  # solves each candidate has been far
         self.factorizations = 0  #: LU factorisations of A'
         self.builds = 0  #: extensions of the compliance blocks
 
@@ -154,7 +159,7 @@ class PointNewtonSolver:
         full.destroy()
         zone_dofs = np.concatenate(self._comm.allgather(self._zone.getIndices()))
         self._compliance = ContactCompliance(A_prime, zone_dofs, self.lu_solver)
-        self._candidates = np.zeros(0, dtype=np.int64)
+        self._candidates = self._far_solves = np.zeros(0, dtype=np.int64)
         self._new_points()
         self.factorizations += 1
 
@@ -188,13 +193,16 @@ class PointNewtonSolver:
         )
         return [last, y_k, y_free] if phi_last < phi_k else [y_k, last, y_free]
 
-    def _update_points(self, contact: NitscheContact) -> None:
+    def _update_points(self, contact: NitscheContact, first: bool) -> None:
         """Fit the candidates and the master band to the contact (collective).
 
         Candidates: the points of this rank's slave facets with a paired point in contact or
         within ``candidate_gap`` of the master; when some must be added, those within
         ``look_ahead`` times that gap come too (fewer, larger extensions); a facet stays a
-        candidate until all of its points are more than twice that far away (hysteresis). Band:
+        candidate until all of its points have been more than twice that far away at the
+        first iteration (``first``) of ``drop_after`` solves in a row (hysteresis in space and
+        in time: after a switch to longer steps an unresolved ringing brings points near and
+        away in turns, each return costing an extension of the blocks). Band:
         the dofs of the master facets the candidates pair with. New points and dofs extend the
         compliance blocks, dropped ones are cut from them (when they are a tenth of the candidates
         or more); a candidate that lost its partner restarts the blocks.
@@ -212,14 +220,18 @@ class PointNewtonSolver:
 
         if comm.allreduce(bool(np.any(~trial.paired[self._candidates])), op=MPI.LOR):
             compliance.reset()
-            self._candidates = np.zeros(0, dtype=np.int64)
+            self._candidates = self._far_solves = np.zeros(0, dtype=np.int64)
             self._new_points()
         near = facet_points((gap <= self.candidate_gap) | (P_n <= 0))
         kept = facet_points((gap <= 2 * self.look_ahead * self.candidate_gap) | (P_n <= 0))
-        keep = np.isin(self._candidates, kept)
+        near_now = np.isin(self._candidates, kept)
+        if first:
+            self._far_solves = np.where(near_now, 0, self._far_solves + 1)
+        keep = near_now | (self._far_solves < self.drop_after)
         dropped = comm.allreduce(int(np.count_nonzero(~keep)), op=MPI.SUM)
         if dropped and dropped >= 0.1 * compliance.points:
             self._candidates = self._candidates[keep]
+            self._far_solves = self._far_solves[keep]
             ops = contact.point_operators(self._candidates)
             needed = self._band_dofs(ops.master_dofs)
             compliance.restrict(ops, keep, np.isin(compliance.band, needed))
@@ -236,6 +248,7 @@ class PointNewtonSolver:
         if added or len(band):
             compliance.extend(ops, len(new), band)
             self._candidates = candidates
+            self._far_solves = np.concatenate([self._far_solves, np.zeros(len(new), np.int64)])
             self._G_master = None  # the earlier points keep their places: the factors stay
             self.builds += 1
 
@@ -336,7 +349,7 @@ class PointNewtonSolver:
                 )
                 break
             t0 = time.perf_counter()
-            self._update_points(contact)
+            self._update_points(contact, first=k == 0)
             y_k, normal, mu, weight, M_b, master = self._gather_points(contact)
             mu_inner = relaxation(mu)
             # a kept G that slowed the last iteration down is rebuilt at the present pairing,

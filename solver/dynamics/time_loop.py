@@ -1,14 +1,44 @@
 """The time loop: integrate an ``Elastodynamics`` problem over an interval with step cutting.
 
 On Newton failure the step is halved and retried, and grows back after a few accepted
-steps (:func:`run`); observers add their values (keys carry units) to each step's row.
+steps (:func:`run`). With ``EventSteps`` a step during which a measure of the state (e.g. the
+settlement) moves faster than a given rate is retaken in finer steps until it rests again:
+the events of a stick-slip staircase are resolved while the steps between them stay long.
+Observers add their values (keys carry units) to each step's row.
 """
 
 from collections.abc import Callable, Sequence
+from dataclasses import dataclass
 
 from solver.dynamics.elastodynamics import Elastodynamics
 
 Observer = Callable[[Elastodynamics], dict[str, float]]
+
+
+@dataclass(frozen=True)
+class EventSteps:
+    """Fine steps within events: a step longer than ``dt_s`` [s] during which ``measure`` moved
+    faster than ``rate`` (its unit per s) is retaken in steps of ``dt_s``; the nominal step
+    resumes at the first time on its grid after ``calm_steps`` fine steps below the rate.
+
+    The nominal step must be a whole multiple of ``dt_s``, so that both step sizes keep their
+    operators (``Elastodynamics(operators_kept=2)`` refactorises nothing on a switch)."""
+
+    dt_s: float
+    rate: float
+    measure: Callable[[Elastodynamics], float]
+    calm_steps: int = 5
+
+    def __post_init__(self) -> None:
+        if not (self.dt_s > 0 and self.rate > 0 and self.calm_steps >= 1):
+            raise ValueError(
+                f"need dt_s > 0, rate > 0 and calm_steps >= 1, "
+                f"got {self.dt_s} s, {self.rate}, {self.calm_steps}"
+            )
+
+
+def _saved_state(problem: Elastodynamics) -> dict:
+    return {key: value.copy() for key, value in problem.state_arrays().items()}
 
 
 def run(
@@ -20,14 +50,16 @@ def run(
     on_row: Callable[[dict[str, float]], None] | None = None,
     progress: bool = True,
     growth_after: int = 4,
+    events: EventSteps | None = None,
 ) -> list[dict[str, float]]:
     """Integrate from problem.t to t_end [s] with nominal step dt [s].
 
     On Newton failure the step is halved and retried; after ``growth_after`` accepted
-    steps it doubles again (up to dt). Below dt_min (default dt/64) a RuntimeError
-    names the time and step. Each accepted step records time_s, dt_s, newton_iterations
-    and every observer's values (keys carry units, e.g. settlement_mm); each row is passed to
-    ``on_row`` as it is produced (e.g. ``solver.post.csv.CsvWriter.write``). Returns the rows.
+    steps it doubles again (up to dt, or up to ``events.dt_s`` within an event). Below dt_min
+    (default dt/64) a RuntimeError names the time and step. Each accepted step records time_s,
+    dt_s, newton_iterations and every observer's values (keys carry units, e.g.
+    settlement_mm); each row is passed to ``on_row`` as it is produced (e.g.
+    ``solver.post.csv.CsvWriter.write``). Returns the rows.
     """
     if not (t_end > problem.t and dt > 0):
         raise ValueError(
@@ -36,6 +68,10 @@ def run(
     dt_min = dt / 64 if dt_min is None else dt_min
     if not 0 < dt_min <= dt:
         raise ValueError(f"need 0 < dt_min <= dt, got dt_min={dt_min} s, dt={dt} s")
+    if events is not None and abs(dt / events.dt_s - round(dt / events.dt_s)) > 1e-9 * dt:
+        raise ValueError(
+            f"the step within events ({events.dt_s} s) must divide the step dt = {dt} s"
+        )
     comm = problem.V.mesh.comm
     bar = None
     if progress and comm.rank == 0:
@@ -46,13 +82,17 @@ def run(
             unit="s",
             bar_format="{l_bar}{bar}| {n:.4g}/{total:.4g} s {postfix}",
         )
-    rows, h, accepted = [], dt, 0
+    t_grid = problem.t  # the nominal steps' grid: t_grid + k dt
+    measured = events.measure(problem) if events is not None else 0.0
+    rows, h, h_max, accepted, calm = [], dt, dt, 0, 0
     try:
         while problem.t < t_end - 1e-12 * t_end:
             remaining = t_end - problem.t
             # a last step within round-off of h is taken as h: a new step size would mean a new
             # effective operator A(dt) and its factorisation
             step = h if abs(remaining - h) <= 1e-9 * h else min(h, remaining)
+            if events is not None:
+                t_old, before = problem.t, _saved_state(problem)
             result = problem.step(step)
             if not result.converged:
                 h = step / 2
@@ -64,6 +104,20 @@ def run(
                         f"last residual norms {result.residual_norms[-3:]} N"
                     )
                 continue
+            if events is not None:
+                now = events.measure(problem)
+                fast = abs(now - measured) > events.rate * step
+                if fast and step > events.dt_s * (1 + 1e-9):  # an event: retaken in fine steps
+                    problem.restore_state(t_old, before)
+                    h = h_max = events.dt_s
+                    accepted = calm = 0
+                    continue
+                measured, calm = now, 0 if fast else calm + 1
+                nominal_steps = (problem.t - t_grid) / dt
+                on_grid = abs(nominal_steps - round(nominal_steps)) < 1e-6
+                if h_max < dt and calm >= events.calm_steps and on_grid:
+                    h = h_max = dt
+                    accepted = 0
             row = {"time_s": problem.t, "dt_s": step, "newton_iterations": result.iterations}
             for observe in observers:
                 row.update(observe(problem))
@@ -76,8 +130,8 @@ def run(
                     {k: f"{v:.4g}" for k, v in row.items() if k != "time_s"}, refresh=False
                 )
             accepted += 1
-            if h < dt and accepted >= growth_after:
-                h, accepted = min(2 * h, dt), 0
+            if h < h_max and accepted >= growth_after:
+                h, accepted = min(2 * h, h_max), 0
     finally:
         if bar is not None:
             bar.close()

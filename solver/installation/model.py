@@ -6,7 +6,7 @@ of the settled joint (:func:`settled_modes`) and the vibration forcing
 from __future__ import annotations
 
 import time
-from collections.abc import Callable
+from collections.abc import Callable, Sequence
 from dataclasses import dataclass, field
 from typing import Any
 
@@ -22,6 +22,7 @@ from solver.contact import NitscheContact, Status
 from solver.dynamics.damping import ModalDamping, RayleighDamping
 from solver.dynamics.elastodynamics import Elastodynamics, assemble_structure
 from solver.dynamics.loads import PointLoad, Schedule, TopFaceLoad, TPLoading, shaker_point
+from solver.dynamics.time_loop import EventSteps, Observer, run
 from solver.installation.case import InstallationCase
 from solver.installation.observers import Settlement
 from solver.modal.eigen import EigenOptions, ModalResult, clamp, modal_analysis
@@ -63,6 +64,31 @@ class JointModel:
     @property
     def n_dofs(self) -> int:
         return self.V.dofmap.index_map.size_global * self.V.dofmap.index_map_bs
+
+    def run_self_weight(
+        self, t_end: float | None = None, observers: Sequence[Observer] = ()
+    ) -> list[dict[str, float]]:
+        """Integrate the self-weight stage from the problem's time to t_end [s] (None: the
+        stage's end) with its step, the case's smallest cut step and, with ``[self_weight]
+        event_dt_s``, steps of event_dt_s where the settlement rate exceeds the event
+        threshold ``[output] slip_rate_mm_s`` (``solver.dynamics.time_loop.run``)."""
+        case, sw = self.case, self.case.self_weight
+        events = None
+        if sw.event_dt_s:
+            events = EventSteps(
+                sw.event_dt_s,
+                case.output.slip_rate_mm_s,
+                lambda problem: self.settlement(problem)["settlement_mm"],
+            )
+        return run(
+            self.problem,
+            sw.duration_s if t_end is None else t_end,
+            sw.dt_s,
+            dt_min=sw.dt_s * case.time.dt_min_fraction,
+            observers=observers,
+            progress=False,
+            events=events,
+        )
 
 
 def _lu_package(choice: str, comm: MPI.Comm) -> str:
@@ -134,6 +160,7 @@ def set_up_joint_model(comm: MPI.Comm, case: InstallationCase) -> JointModel:
         newton_options=_newton_options(case, comm),
         condense_bulk=case.contact.condense_bulk,
         contact_solver=case.contact.solver,
+        operators_kept=2 if sw.event_dt_s else 1,  # the nominal and the event step
     )
     problem.initialise(0.0)
     settlement = Settlement(problem.u, placed, mesh_data.cell_tags)

@@ -178,6 +178,7 @@ class Installation:
 
     def _run_stage(self, index: int, first_chunk: int, writer, bar) -> None:
         plan, model = self.plans[index], self.model
+        assert model is not None  # set up by run()
         problem = model.problem
         steps = self.case.output.checkpoint_every
         n_chunks = max(1, math.ceil((plan.end_s - plan.start_s) / (steps * plan.dt_s) - 1e-9))
@@ -195,14 +196,17 @@ class Installation:
             if chunk == n_chunks - 1:
                 t_end = plan.end_s
             if t_end > problem.t + 1e-12 * max(t_end, 1.0):
-                run(
-                    problem,
-                    t_end,
-                    plan.dt_s,
-                    dt_min=plan.dt_s * self.case.time.dt_min_fraction,
-                    observers=observers,
-                    progress=False,
-                )
+                if index == 0:  # with its fine steps within settling events
+                    model.run_self_weight(t_end, observers)
+                else:
+                    run(
+                        problem,
+                        t_end,
+                        plan.dt_s,
+                        dt_min=plan.dt_s * self.case.time.dt_min_fraction,
+                        observers=observers,
+                        progress=False,
+                    )
             if chunk < n_chunks - 1:
                 self._checkpoint(index, chunk + 1)
         rows = [r for r in self.history if r["stage"] == index]

@@ -143,6 +143,9 @@ class SelfWeightSettings:
     ramp_time_s: float = 2.0
     hold_s: float = 0.1  #: held after the ramp [s]
     dt_s: float = 0.01  #: time step [s]
+    #: step within settling events [s] (0: none): a step during which the settlement rate
+    #: exceeds ``[output] slip_rate_mm_s`` is retaken in steps of event_dt_s (it divides dt_s)
+    event_dt_s: float = 0.0
     #: "" = the [time] scheme and rho_inf; or quasi-static / newmark / generalised-alpha (with
     #: ``rho_inf``): the self-weight stage may damp numerically what the vibration stages must not
     scheme: str = ""
@@ -160,6 +163,14 @@ class SelfWeightSettings:
             )
         if not 0 < self.dt_s <= self.ramp_time_s + self.hold_s:
             raise ValueError(f"dt_s must lie in (0, ramp_time_s + hold_s], got {self.dt_s} s")
+        if self.event_dt_s:
+            ratio = self.dt_s / self.event_dt_s
+            if not (
+                self.event_dt_s > 0 and ratio >= 1 and abs(ratio - round(ratio)) < 1e-9 * ratio
+            ):
+                raise ValueError(
+                    f"event_dt_s must be 0 or divide dt_s = {self.dt_s} s, got {self.event_dt_s} s"
+                )
         if self.scheme:
             _check_choice("scheme", self.scheme, ("newmark", "generalised-alpha", "quasi-static"))
         if not 0 <= self.rho_inf <= 1:

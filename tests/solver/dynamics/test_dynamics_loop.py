@@ -15,7 +15,7 @@ from geometry import tags
 from geometry.mesh import create_joint_mesh
 from geometry.parameters import MeshOptions, load_geometry
 from solver.dynamics.elastodynamics import StepResult
-from solver.dynamics.time_loop import run
+from solver.dynamics.time_loop import EventSteps, run
 from solver.installation.observers import Settlement
 from solver.post.csv import CsvWriter
 
@@ -74,11 +74,24 @@ def test_minimum_step_gives_a_clear_error():
 
 @pytest.mark.parametrize(
     "kwargs",
-    [dict(t_end=-1.0, dt=0.1), dict(t_end=1.0, dt=0.0), dict(t_end=1.0, dt=0.1, dt_min=0.2)],
+    [
+        dict(t_end=-1.0, dt=0.1),
+        dict(t_end=1.0, dt=0.0),
+        dict(t_end=1.0, dt=0.1, dt_min=0.2),
+        dict(t_end=1.0, dt=0.1, events=EventSteps(0.03, 1.0, lambda problem: 0.0)),
+    ],
 )
 def test_bad_run_arguments_raise(kwargs):
     with pytest.raises(ValueError):
         run(FlakyProblem(2.0, 1.0), progress=False, **kwargs)
+
+
+@pytest.mark.parametrize(
+    "args", [(0.0, 1.0, lambda p: 0.0), (0.01, 0.0, lambda p: 0.0), (0.01, 1.0, lambda p: 0.0, 0)]
+)
+def test_bad_event_steps_raise(args):
+    with pytest.raises(ValueError, match="need dt_s > 0, rate > 0 and calm_steps >= 1"):
+        EventSteps(*args)
 
 
 @pytest.fixture(scope="module")

@@ -10,7 +10,10 @@
    F_f = mu N. Reference: Den Hartog's (1931) closed-form periodic motion without
    stops, obtained from the half-period boundary-value problem
    m x'' + k x = F0 cos(omega t + phi) - F_f, x(0) = -X0, x(pi/omega) = X0, x' = 0 at both.
+   With stops (stick-slip) the reference is a run with ten times finer steps.
 """
+
+import functools
 
 import numpy as np
 import pytest
@@ -27,7 +30,7 @@ from solver.contact import FrictionLaw, RigidPlaneContact, Status
 from solver.dynamics.elastodynamics import Elastodynamics, assemble_structure
 from solver.dynamics.loads import TopFaceLoad
 from solver.dynamics.schemes import GeneralisedAlpha, QuasiStatic
-from solver.dynamics.time_loop import run
+from solver.dynamics.time_loop import EventSteps, run
 from solver.probes import PointProbe
 
 pytestmark = pytest.mark.mpi
@@ -123,6 +126,8 @@ def den_hartog(m, k, F0, Ff, omega):
 M_BLOCK, K_SPRING, F0, MU = 1.0, (2 * np.pi) ** 2, 1.0, 0.3  # kg, N/m (1 Hz), N, -
 F_FRICTION, OMEGA = 0.2, 0.6 * 2 * np.pi  # N, rad/s
 STOPS = 0.6  # friction force [N] with which the block, started at rest, stops once
+STICKS = 0.95  # friction force [N] with which the block sticks for much of each half-period
+SLIDING_RATE = 1e-4  # block speed [m/s] above which it slides (its peak speed: about 20 mm/s)
 
 
 def test_den_hartog_reference_solves_the_ode():
@@ -139,11 +144,18 @@ def test_den_hartog_reference_solves_the_ode():
 
 
 def friction_oscillator(
-    periods: float = 2.0, friction_force: float = F_FRICTION, backtracks: int = 0
+    periods: float = 2.0,
+    friction_force: float = F_FRICTION,
+    backtracks: int = 0,
+    steps_per_period: int = 100,
+    event_steps_per_period: int = 0,
+    operators_kept: int = 1,
 ) -> dict[str, np.ndarray]:
     """Time [s], block displacement x [m] and the number of slipping points per step of the
-    friction oscillator with friction force ``friction_force`` [N], 100 steps per period, started on
-    Den Hartog's orbit (x = -X0, at rest) where that exists, else at rest at x = 0 with phi = 0
+    friction oscillator with friction force ``friction_force`` [N], ``steps_per_period`` steps
+    per period (and ``event_steps_per_period`` while the block slides faster than
+    SLIDING_RATE: ``EventSteps``; ``operators_kept``: ``Elastodynamics``), started on Den
+    Hartog's orbit (x = -X0, at rest) where that exists, else at rest at x = 0 with phi = 0
     (``backtracks``: Newton line-search halvings, which the stops need)."""
     try:
         X0, phi, _ = den_hartog(M_BLOCK, K_SPRING, F0, friction_force, OMEGA)
@@ -204,6 +216,7 @@ def friction_oscillator(
         contact=contact,
         load=load,
         newton_options=NEWTON | {"max_backtracks": backtracks},
+        operators_kept=operators_kept,
     )
     problem.u.x.array[:] = static.u.x.array
     problem.u.x.array[0::2] -= X0
@@ -215,7 +228,17 @@ def friction_oscillator(
         return {"x_m": centre()[0, 0], "slipping": slipping}
 
     period = 2 * np.pi / OMEGA
-    rows = run(problem, periods * period, period / 100, observers=[observe], progress=False)
+    events = None
+    if event_steps_per_period:
+        events = EventSteps(period / event_steps_per_period, SLIDING_RATE, lambda p: centre()[0, 0])
+    rows = run(
+        problem,
+        periods * period,
+        period / steps_per_period,
+        observers=[observe],
+        progress=False,
+        events=events,
+    )
     return {k: np.array([r[k] for r in rows]) for k in ("time_s", "x_m", "slipping")}
 
 
@@ -234,6 +257,39 @@ def test_friction_oscillator_matches_den_hartog():
     assert amplitude == pytest.approx(X0, rel=0.03)
     assert history_error < 0.03
     assert slipping.sum() > 0  # the block slides (and it is not glued by a wrong friction limit)
+
+
+def test_event_steps_resolve_stick_slip():
+    """Stick-slip (friction 0.95 F0, started at rest): 20 steps per period, retaken at 200 per
+    period wherever the block slides (``EventSteps``), follow the uniform run at 200 steps per
+    period, which the uniform run at 20 does not; the long steps fall only where the block
+    sticks. Keeping the operators of both step sizes changes nothing but the cost."""
+    period = 2 * np.pi / OMEGA
+    run_with = functools.partial(friction_oscillator, 3.0, STICKS, 4)
+    fine = run_with(steps_per_period=200)
+    coarse = run_with(steps_per_period=20)
+    stepped = run_with(steps_per_period=20, event_steps_per_period=200, operators_kept=2)
+    refactorised = run_with(steps_per_period=20, event_steps_per_period=200)
+    grid = np.arange(1, 61) * period / 20
+    reference = np.interp(grid, fine["time_s"], fine["x_m"])
+    amplitude = np.max(np.abs(reference))
+
+    def error(history):
+        return np.max(np.abs(np.interp(grid, history["time_s"], history["x_m"]) - reference))
+
+    dt = np.diff(np.r_[0.0, stepped["time_s"]])
+    long = dt > 1.5 * period / 200
+    rate = np.abs(np.diff(np.r_[0.0, stepped["x_m"]])) / dt
+    print(
+        f"\nstick-slip over 3 periods: {len(stepped['time_s'])} steps ({np.sum(long)} long) "
+        f"against {len(fine['time_s'])}; largest error {error(stepped) / amplitude:.2%} of the "
+        f"amplitude, uniform long steps {error(coarse) / amplitude:.0%}"
+    )
+    assert error(stepped) < 0.01 * amplitude < 0.1 * error(coarse)
+    assert 0 < np.sum(long) and len(stepped["time_s"]) < 0.7 * len(fine["time_s"])
+    assert np.all(rate[long] <= SLIDING_RATE)
+    assert np.array_equal(stepped["time_s"], refactorised["time_s"])
+    assert np.max(np.abs(stepped["x_m"] - refactorised["x_m"])) < 1e-7 * amplitude
 
 
 def test_newton_starts_from_u_n_where_stick_and_slip_change(monkeypatch):
