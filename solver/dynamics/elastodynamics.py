@@ -87,6 +87,11 @@ class _StepOperator:
     condensation: BulkCondensation | None = None
     newton: Any = None  #: a ``CONTACT_SOLVERS`` solver on A (or on the condensed A_hat)
 
+    def destroy(self) -> None:
+        for obj in (self.newton, self.condensation, self.ksp, self.A):
+            if obj is not None:
+                obj.destroy()
+
 
 class Elastodynamics:
     """State (u, v, a) at time t and the step u_n -> u_{n+1} of a Newmark-family scheme.
@@ -190,8 +195,11 @@ class Elastodynamics:
         """Make A(dt) = K + c_M M + c_C (a M + b K) current: a kept one, else new values in the
         least recently used (factorised lazily by the KSP and the contact solver)."""
         kept = [op for op in self._operators if op.dt == dt]
+        unset = [op for op in self._operators if op.dt is None]
         if kept:
             operator = kept[0]
+        elif unset:
+            operator = unset[0]
         elif len(self._operators) < self.operators_kept:
             operator = self._new_operator()
         else:
@@ -342,6 +350,9 @@ class Elastodynamics:
         self._assemble_operator(dt)
         self._effective_load(dt)
         u_old = self.u.x.array.copy()
+        memory = {}
+        if self.contact is not None:
+            memory = {key: value.copy() for key, value in self.contact.memory().items()}
         if self.contact is None:
             ksp = self._operator.ksp
             ksp.solve(self._b, self.u.x.petsc_vec)
@@ -369,6 +380,9 @@ class Elastodynamics:
         if not result.converged:
             self.failed_steps += 1
             self.u.x.array[:] = u_old
+            if self.contact is not None:  # the contact state at u_n, not at the last iterate
+                self.contact.update(self.u)
+                self.contact.restore_memory(memory)
             return result
         self.u.x.scatter_forward()
         if self.contact is not None:  # the solver left the contact updated at u_{n+1}
@@ -391,6 +405,15 @@ class Elastodynamics:
         """Drop the factorisations and the Newton workspaces: the next step starts afresh."""
         for operator in self._operators:
             operator.dt = None
+
+    def keep_operators(self, n: int) -> None:
+        """From now on keep the operators of at most n >= 1 step sizes; the least recently used
+        beyond n are destroyed (e.g. the second step size's after a stage that alternated two)."""
+        if n < 1:
+            raise ValueError(f"operators_kept must be >= 1, got {n}")
+        self.operators_kept = n
+        while len(self._operators) > n:
+            self._operators.pop(0).destroy()
 
     def set_scheme(self, scheme: Scheme) -> None:
         """Integrate the following steps with ``scheme`` (the operator is rebuilt)."""

@@ -10,6 +10,8 @@ Observers add their values (keys carry units) to each step's row.
 from collections.abc import Callable, Sequence
 from dataclasses import dataclass
 
+from mpi4py import MPI
+
 from solver.dynamics.elastodynamics import Elastodynamics
 
 Observer = Callable[[Elastodynamics], dict[str, float]]
@@ -19,7 +21,8 @@ Observer = Callable[[Elastodynamics], dict[str, float]]
 class EventSteps:
     """Fine steps within events: a step longer than ``dt_s`` [s] during which ``measure`` moved
     faster than ``rate`` (its unit per s) is retaken in steps of ``dt_s``; the nominal step
-    resumes at the first time on its grid after ``calm_steps`` fine steps below the rate.
+    resumes at the first time on its grid after ``calm_steps`` fine steps below the rate (at
+    once if a cut step left the time off the grid of dt_s; the nominal grid restarts there).
 
     The nominal step must be a whole multiple of ``dt_s``, so that both step sizes keep their
     operators (``Elastodynamics(operators_kept=2)`` refactorises nothing on a switch)."""
@@ -39,6 +42,16 @@ class EventSteps:
 
 def _saved_state(problem: Elastodynamics) -> dict:
     return {key: value.copy() for key, value in problem.state_arrays().items()}
+
+
+def _may_resume(elapsed: float, dt: float, dt_s: float) -> bool:
+    """Whether the nominal step dt may resume after ``elapsed`` [s] on the nominal grid: on that
+    grid, or off the fine grid of dt_s (a cut step moved it; the grid then restarts here)."""
+
+    def on(grid: float) -> bool:
+        return abs(elapsed / grid - round(elapsed / grid)) < 1e-6
+
+    return on(dt) or not on(dt_s)
 
 
 def run(
@@ -68,10 +81,13 @@ def run(
     dt_min = dt / 64 if dt_min is None else dt_min
     if not 0 < dt_min <= dt:
         raise ValueError(f"need 0 < dt_min <= dt, got dt_min={dt_min} s, dt={dt} s")
-    if events is not None and abs(dt / events.dt_s - round(dt / events.dt_s)) > 1e-9 * dt:
-        raise ValueError(
-            f"the step within events ({events.dt_s} s) must divide the step dt = {dt} s"
-        )
+    if events is not None:
+        ratio = dt / events.dt_s
+        if abs(ratio - round(ratio)) > 1e-9 * ratio or not dt_min <= events.dt_s <= dt:
+            raise ValueError(
+                f"the step within events ({events.dt_s} s) must divide the step dt = {dt} s "
+                f"and be at least the smallest cut step dt_min = {dt_min} s"
+            )
     comm = problem.V.mesh.comm
     bar = None
     if progress and comm.rank == 0:
@@ -106,18 +122,20 @@ def run(
                 continue
             if events is not None:
                 now = events.measure(problem)
-                fast = abs(now - measured) > events.rate * step
+                fast = comm.allreduce(abs(now - measured) > events.rate * step, op=MPI.LOR)
                 if fast and step > events.dt_s * (1 + 1e-9):  # an event: retaken in fine steps
                     problem.restore_state(t_old, before)
                     h = h_max = events.dt_s
                     accepted = calm = 0
                     continue
                 measured, calm = now, 0 if fast else calm + 1
-                nominal_steps = (problem.t - t_grid) / dt
-                on_grid = abs(nominal_steps - round(nominal_steps)) < 1e-6
-                if h_max < dt and calm >= events.calm_steps and on_grid:
+                if (
+                    h_max < dt
+                    and calm >= events.calm_steps
+                    and _may_resume(problem.t - t_grid, dt, events.dt_s)
+                ):
                     h = h_max = dt
-                    accepted = 0
+                    accepted, t_grid = 0, problem.t
             row = {"time_s": problem.t, "dt_s": step, "newton_iterations": result.iterations}
             for observe in observers:
                 row.update(observe(problem))

@@ -113,6 +113,12 @@ class InstallationCase:
                     "'ranked k' stages (the automatic schedule comes from the modal stage)"
                 )
             check_time_scheme(settings["time"], settings["damping"])
+            sw, smallest = settings["self_weight"], settings["time"].dt_min_fraction
+            if sw.event_dt_s and sw.event_dt_s < smallest * sw.dt_s:
+                raise ValueError(
+                    f"[self_weight] event_dt_s = {sw.event_dt_s} s lies below the smallest cut "
+                    f"step dt_s * time.dt_min_fraction = {smallest * sw.dt_s} s"
+                )
             imperfections = _imperfections(case, joint)
             if vib.forcing == "shaker" and not 0 <= vib.shaker_height_m <= joint.tp.total_length:
                 raise ValueError(

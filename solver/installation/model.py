@@ -71,7 +71,8 @@ class JointModel:
         """Integrate the self-weight stage from the problem's time to t_end [s] (None: the
         stage's end) with its step, the case's smallest cut step and, with ``[self_weight]
         event_dt_s``, steps of event_dt_s where the settlement rate exceeds the event
-        threshold ``[output] slip_rate_mm_s`` (``solver.dynamics.time_loop.run``)."""
+        threshold ``[output] slip_rate_mm_s`` (``solver.dynamics.time_loop.run``). At the
+        stage's end the problem keeps one step size's operator."""
         case, sw = self.case, self.case.self_weight
         events = None
         if sw.event_dt_s:
@@ -80,7 +81,7 @@ class JointModel:
                 case.output.slip_rate_mm_s,
                 lambda problem: self.settlement(problem)["settlement_mm"],
             )
-        return run(
+        rows = run(
             self.problem,
             sw.duration_s if t_end is None else t_end,
             sw.dt_s,
@@ -89,6 +90,9 @@ class JointModel:
             progress=False,
             events=events,
         )
+        if self.problem.t >= sw.duration_s * (1 - 1e-12):  # the event step's operator is done
+            self.problem.keep_operators(1)
+        return rows
 
 
 def _lu_package(choice: str, comm: MPI.Comm) -> str:

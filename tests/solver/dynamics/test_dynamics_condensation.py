@@ -123,12 +123,15 @@ def test_update_equals_a_new_condensation():
     assert difference.norm() <= 1e-12 * new.A_hat.norm()
 
 
-def settle(condense_bulk: bool):
-    joint, data, V, bcs, M, K, contact = coarse_joint()
+def settling_problem(
+    condense_bulk: bool, max_iterations: int = 30, joint_model=None
+) -> Elastodynamics:
+    """The coarse joint under 10 kN ramped over 0.2 s (``joint_model``: coarse_joint()'s)."""
+    joint, data, V, bcs, M, K, contact = joint_model or coarse_joint()
     loading = TPLoading(
         TopFaceLoad(V, data.facet_tags, tags.TP_TOP), static_axial=RampedAxialForce(-10e3, 0.2)
     )
-    problem = Elastodynamics(
+    return Elastodynamics(
         V,
         M,
         K,
@@ -137,9 +140,18 @@ def settle(condense_bulk: bool):
         scheme=GeneralisedAlpha.from_spectral_radius(0.0),
         damping=RayleighDamping.at_frequency(0.01, 120.0),
         contact=contact,
-        newton_options={"max_backtracks": 4, "max_gap_change": 1e-5},
+        newton_options={
+            "max_backtracks": 4,
+            "max_gap_change": 1e-5,
+            "max_iterations": max_iterations,
+        },
         condense_bulk=condense_bulk,
     )
+
+
+def settle(condense_bulk: bool):
+    joint, data, V, bcs, M, K, contact = joint_model = coarse_joint()
+    problem = settling_problem(condense_bulk, joint_model=joint_model)
     problem.initialise(0.0)
     rows = run(
         problem, 0.3, 0.01, observers=[Settlement(problem.u, joint, data.cell_tags)], progress=False
@@ -158,3 +170,23 @@ def test_condensed_dynamics_matches_uncondensed():
     assert s_full[-1] > 0.5  # the TP landed and slid
     assert np.abs(s_full - s_cond).max() <= 1e-6 * np.abs(s_full).max()
     assert np.array_equal(status_full, status_cond)
+
+
+def test_failed_step_leaves_the_state_unchanged():
+    """A step whose Newton fails (one iteration allowed, while the TP slides) leaves every array
+    the next step depends on as it was, the contact memory (the lagged friction coefficient's
+    slip speed, the pairing) included: the retried step starts from u_n, not the last iterate."""
+    joint_model = coarse_joint()
+    problem = settling_problem(False, joint_model=joint_model)
+    problem.initialise(0.0)
+    run(problem, 0.15, 0.01, progress=False)
+    saved = {key: value.copy() for key, value in problem.state_arrays().items()}
+    assert MPI.COMM_WORLD.allreduce(np.abs(saved["slip_velocity"]).max(), op=MPI.MAX) > 0
+    strict = settling_problem(False, max_iterations=1, joint_model=joint_model)
+    strict.restore_state(problem.t, saved)
+    result = strict.step(0.01)
+    assert not result.converged and strict.t == problem.t
+    after = strict.state_arrays()
+    assert set(after) == set(saved)
+    for key, value in saved.items():
+        assert np.array_equal(after[key], value), key

@@ -72,6 +72,39 @@ def test_minimum_step_gives_a_clear_error():
         run(problem, 1.0, 0.1, dt_min=0.01, progress=False)
 
 
+class EventfulProblem(FlakyProblem):
+    """A FlakyProblem whose measure (position(t) [m]) moves at 1 m/s for 0.3 s <= t <= 0.5 s and
+    rests otherwise; its state is t alone."""
+
+    def position(self) -> float:
+        return min(max(self.t - 0.3, 0.0), 0.2)
+
+    def state_arrays(self) -> dict:
+        return {}
+
+    def restore_state(self, t: float, arrays: dict) -> None:
+        self.t = t
+
+
+def test_nominal_step_resumes_after_a_cut_within_an_event():
+    """Steps of 0.1 s, events at 0.01 s (rate 0.3 m/s); within the event Newton fails at
+    0.407 s for steps above 0.004 s: 0.01 s is cut to 0.005 s, which passes once (to 0.405 s)
+    and is cut again, so the time leaves the grid of 0.01 s by 0.005 s. The event is resolved in
+    steps <= 0.01 s, and 5 calm steps after it (at 0.555 s) the nominal step resumes at once,
+    instead of waiting for a time on its grid that the fine steps can no longer reach."""
+    problem = EventfulProblem(t_hard=0.407, max_ok=0.004)
+    events = EventSteps(0.01, 0.3, EventfulProblem.position)
+    rows = run(problem, 1.0, 0.1, events=events, progress=False)
+    times, steps = np.array([r["time_s"] for r in rows]), np.array([r["dt_s"] for r in rows])
+    assert steps.sum() == pytest.approx(1.0) and times[-1] == pytest.approx(1.0)
+    assert steps[(times > 0.3 + 1e-9) & (times < 0.5)].max() <= 0.01 + 1e-12  # event resolved
+    assert steps.min() == pytest.approx(0.0025)  # cut twice within it
+    assert any(abs(t - 0.555) < 1e-9 for t in times)  # off the grid of 0.01 s after the cuts
+    nominal = np.flatnonzero(np.isclose(steps, 0.1) & (times > 0.5))
+    assert len(nominal) == 4 and times[nominal[0]] == pytest.approx(0.655)
+    assert np.all(np.isclose(steps[nominal[0] : -1], 0.1))  # nominal to the end but the last
+
+
 @pytest.mark.parametrize(
     "kwargs",
     [
@@ -79,6 +112,7 @@ def test_minimum_step_gives_a_clear_error():
         dict(t_end=1.0, dt=0.0),
         dict(t_end=1.0, dt=0.1, dt_min=0.2),
         dict(t_end=1.0, dt=0.1, events=EventSteps(0.03, 1.0, lambda problem: 0.0)),
+        dict(t_end=1.0, dt=0.1, events=EventSteps(0.001, 1.0, lambda problem: 0.0)),
     ],
 )
 def test_bad_run_arguments_raise(kwargs):

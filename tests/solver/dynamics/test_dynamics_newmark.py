@@ -85,8 +85,10 @@ def modes(beam):
     return lowest_modes(K, M, bcs, 3)
 
 
-def start_in_mode(V, M, K, bcs, phi, scheme, damping=None) -> Elastodynamics:
-    problem = Elastodynamics(V, M, K, bcs, scheme=scheme, damping=damping)
+def start_in_mode(V, M, K, bcs, phi, scheme, damping=None, operators_kept=1) -> Elastodynamics:
+    problem = Elastodynamics(
+        V, M, K, bcs, scheme=scheme, damping=damping, operators_kept=operators_kept
+    )
     phi.copy(problem.u.x.petsc_vec)
     problem.u.x.scatter_forward()
     problem.initialise(0.0)
@@ -118,6 +120,32 @@ def test_energy_conserved_over_1000_steps(beam, modes):
     assert drift < 1e-8
     kinetic, strain = problem.energy()
     assert kinetic > 0.01 * e0  # the motion did not stop
+
+
+def test_kept_operators_change_nothing_but_the_cost(beam, modes):
+    """Steps alternating between two sizes with both operators kept, then with one
+    (``keep_operators(1)``), give the history of a problem that rebuilds its operator at every
+    change of the step, to round-off."""
+    V, M, K, bcs = beam
+    omega, phi = modes[0]
+    dt = 2 * np.pi / omega / 32
+    steps = [dt, dt, dt / 2, dt / 2, dt, dt / 4, dt / 2, dt]
+    histories = []
+    for kept in (1, 2):
+        problem = start_in_mode(
+            V, M, K, bcs, phi, GeneralisedAlpha.from_spectral_radius(0.8), operators_kept=kept
+        )
+        coordinate = modal_coordinate(M, phi)
+        history = []
+        for i, h in enumerate(steps * 2):
+            if i == len(steps):
+                problem.keep_operators(1)
+            assert problem.step(h).converged
+            history.append(coordinate(problem)["q"])
+        histories.append(np.array(history))
+    assert np.max(np.abs(histories[1] - histories[0])) < 1e-10
+    with pytest.raises(ValueError, match="operators_kept must be >= 1"):
+        problem.keep_operators(0)
 
 
 @pytest.mark.parametrize(

@@ -263,7 +263,8 @@ def test_event_steps_resolve_stick_slip():
     """Stick-slip (friction 0.95 F0, started at rest): 20 steps per period, retaken at 200 per
     period wherever the block slides (``EventSteps``), follow the uniform run at 200 steps per
     period, which the uniform run at 20 does not; the long steps fall only where the block
-    sticks. Keeping the operators of both step sizes changes nothing but the cost."""
+    sticks (in them the uniform run at 200 travels less than 0.1 % of its path). Keeping the
+    operators of both step sizes changes nothing but the cost."""
     period = 2 * np.pi / OMEGA
     run_with = functools.partial(friction_oscillator, 3.0, STICKS, 4)
     fine = run_with(steps_per_period=200)
@@ -279,7 +280,10 @@ def test_event_steps_resolve_stick_slip():
 
     dt = np.diff(np.r_[0.0, stepped["time_s"]])
     long = dt > 1.5 * period / 200
-    rate = np.abs(np.diff(np.r_[0.0, stepped["x_m"]])) / dt
+    within_long = np.zeros(len(fine["time_s"]), dtype=bool)  # the fine run's steps in long ones
+    for end, step in zip(stepped["time_s"][long], dt[long]):
+        within_long |= (fine["time_s"] > end - step + 1e-12) & (fine["time_s"] <= end + 1e-12)
+    travel = np.abs(np.diff(np.r_[0.0, fine["x_m"]]))  # the fine run's path per step [m]
     print(
         f"\nstick-slip over 3 periods: {len(stepped['time_s'])} steps ({np.sum(long)} long) "
         f"against {len(fine['time_s'])}; largest error {error(stepped) / amplitude:.2%} of the "
@@ -287,7 +291,7 @@ def test_event_steps_resolve_stick_slip():
     )
     assert error(stepped) < 0.01 * amplitude < 0.1 * error(coarse)
     assert 0 < np.sum(long) and len(stepped["time_s"]) < 0.7 * len(fine["time_s"])
-    assert np.all(rate[long] <= SLIDING_RATE)
+    assert travel[within_long].sum() < 1e-3 * travel.sum()  # long steps where the block rests
     assert np.array_equal(stepped["time_s"], refactorised["time_s"])
     assert np.max(np.abs(stepped["x_m"] - refactorised["x_m"])) < 1e-7 * amplitude
 

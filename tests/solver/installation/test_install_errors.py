@@ -44,6 +44,7 @@ def test_presets_are_valid_installation_cases():
         ("self_weight.force_N=10e3", ["force_N", "negative"]),
         ("self_weight.event_dt_s=0.003", ["event_dt_s", "divide dt_s"]),
         ("self_weight.event_dt_s=0.001", None),
+        ("self_weight.event_dt_s=0.0001", ["event_dt_s", "smallest cut step"]),
         ("time.scheme=euler", ["scheme", "generalised-alpha"]),
         ("time.steps_per_period=2", ["steps_per_period"]),
         ("contact.slave=MP_CONTACT", ["slave and master must differ"]),
