@@ -70,16 +70,17 @@ class JointModel:
     ) -> list[dict[str, float]]:
         """Integrate the self-weight stage from the problem's time to t_end [s] (None: the
         stage's end) with its step, the case's smallest cut step and, with ``[self_weight]
-        event_dt_s``, steps of event_dt_s where the settlement rate exceeds the event
-        threshold ``[output] slip_rate_mm_s`` (``solver.dynamics.time_loop.run``). At the
+        event_dt_s``, steps of event_dt_s where the settlement rate exceeds ``event_rate_mm_s``
+        (``solver.dynamics.time_loop.run``). At the
         stage's end the problem keeps one step size's operator."""
         case, sw = self.case, self.case.self_weight
         events = None
         if sw.event_dt_s:
             events = EventSteps(
                 sw.event_dt_s,
-                case.output.slip_rate_mm_s,
+                sw.event_rate_mm_s,
                 lambda problem: self.settlement(problem)["settlement_mm"],
+                calm_steps=sw.event_calm_steps,
             )
         rows = run(
             self.problem,

@@ -144,8 +144,14 @@ class SelfWeightSettings:
     hold_s: float = 0.1  #: held after the ramp [s]
     dt_s: float = 0.01  #: time step [s]
     #: step within settling events [s] (0: none): a step during which the settlement rate
-    #: exceeds ``[output] slip_rate_mm_s`` is retaken in steps of event_dt_s (it divides dt_s)
+    #: exceeds event_rate_mm_s is retaken in steps of event_dt_s (it divides dt_s)
     event_dt_s: float = 0.0
+    #: settlement rate that starts an event [mm/s]: a tenth of the one that counts an episode
+    #: ([output] slip_rate_mm_s), so the steps before an event's onset are retaken as well
+    event_rate_mm_s: float = 0.1
+    #: fine steps below event_rate_mm_s after which the step dt_s resumes (the ringing after an
+    #: event resolved)
+    event_calm_steps: int = 20
     #: "" = the [time] scheme and rho_inf; or quasi-static / newmark / generalised-alpha (with
     #: ``rho_inf``): the self-weight stage may damp numerically what the vibration stages must not
     scheme: str = ""
@@ -171,6 +177,12 @@ class SelfWeightSettings:
                 raise ValueError(
                     f"event_dt_s must be 0 or divide dt_s = {self.dt_s} s, got {self.event_dt_s} s"
                 )
+        if not self.event_rate_mm_s > 0:
+            raise ValueError(f"event_rate_mm_s must be positive, got {self.event_rate_mm_s}")
+        if not (isinstance(self.event_calm_steps, int) and self.event_calm_steps >= 1):
+            raise ValueError(
+                f"event_calm_steps must be an integer >= 1, got {self.event_calm_steps!r}"
+            )
         if self.scheme:
             _check_choice("scheme", self.scheme, ("newmark", "generalised-alpha", "quasi-static"))
         if not 0 <= self.rho_inf <= 1:

@@ -45,6 +45,8 @@ def test_presets_are_valid_installation_cases():
         ("self_weight.event_dt_s=0.003", ["event_dt_s", "divide dt_s"]),
         ("self_weight.event_dt_s=0.001", None),
         ("self_weight.event_dt_s=0.0001", ["event_dt_s", "smallest cut step"]),
+        ("self_weight.event_rate_mm_s=0", ["event_rate_mm_s", "positive"]),
+        ("self_weight.event_calm_steps=0.5", ["event_calm_steps", "integer"]),
         ("time.scheme=euler", ["scheme", "generalised-alpha"]),
         ("time.steps_per_period=2", ["steps_per_period"]),
         ("contact.slave=MP_CONTACT", ["slave and master must differ"]),
