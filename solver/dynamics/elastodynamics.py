@@ -406,6 +406,11 @@ class Elastodynamics:
         for operator in self._operators:
             operator.dt = None
 
+    @property
+    def operators_held(self) -> int:
+        """Step sizes whose operators (A and its factorisations) are held now."""
+        return len(self._operators)
+
     def keep_operators(self, n: int) -> None:
         """From now on keep the operators of at most n >= 1 step sizes; the least recently used
         beyond n are destroyed (e.g. the second step size's after a stage that alternated two)."""
@@ -421,10 +426,13 @@ class Elastodynamics:
         self.reset_operator()
 
     def state_arrays(self) -> dict[str, np.ndarray]:
-        """This rank's local arrays (owned and ghost entries) of everything the next step depends
-        on besides t: u, v, a [m, m/s, m/s^2], the contact residual at u_n (generalised-alpha) [N],
-        the contact model's memory and, after a contact step, the points' status (which chooses
-        the next step's Newton start). Views, not copies."""
+        """This rank's local arrays (owned and ghost entries) of everything the next step's
+        solution depends on besides t: u, v, a [m, m/s, m/s^2], the contact residual at u_n
+        (generalised-alpha) [N], the contact model's memory and, after a contact step, the
+        points' status (which chooses the next step's Newton start). The contact solver's warm
+        starts (the points solver's last inner solution, candidates and their counters) are not
+        in it: they change the Newton path, not its solution to the tolerance. Views, not
+        copies."""
         arrays = {
             "u": self.u.x.array,
             "v": self.v.x.array,

@@ -30,7 +30,7 @@ class EventSteps:
     dt_s: float
     rate: float
     measure: Callable[[Elastodynamics], float]
-    calm_steps: int = 5
+    calm_steps: int
 
     def __post_init__(self) -> None:
         if not (self.dt_s > 0 and self.rate > 0 and self.calm_steps >= 1):

@@ -182,6 +182,10 @@ class Installation:
         problem = model.problem
         steps = self.case.output.checkpoint_every
         n_chunks = max(1, math.ceil((plan.end_s - plan.start_s) / (steps * plan.dt_s) - 1e-9))
+        if index == 0 and self.case.self_weight.event_dt_s:
+            n_chunks = 1  # the event steps' state (step, calm steps, grid) lives in one call of run
+        if index > 0:  # one step size per stage from here (also in a run resumed after stage 0)
+            problem.keep_operators(1)
         self.on_stage("start", plan)
         observers = [self._observer(index, plan, writer, bar)]
         mesh = self.case.mesh

@@ -93,7 +93,7 @@ def test_nominal_step_resumes_after_a_cut_within_an_event():
     steps <= 0.01 s, and 5 calm steps after it (at 0.555 s) the nominal step resumes at once,
     instead of waiting for a time on its grid that the fine steps can no longer reach."""
     problem = EventfulProblem(t_hard=0.407, max_ok=0.004)
-    events = EventSteps(0.01, 0.3, EventfulProblem.position)
+    events = EventSteps(0.01, 0.3, EventfulProblem.position, calm_steps=5)
     rows = run(problem, 1.0, 0.1, events=events, progress=False)
     times, steps = np.array([r["time_s"] for r in rows]), np.array([r["dt_s"] for r in rows])
     assert steps.sum() == pytest.approx(1.0) and times[-1] == pytest.approx(1.0)
@@ -111,8 +111,8 @@ def test_nominal_step_resumes_after_a_cut_within_an_event():
         dict(t_end=-1.0, dt=0.1),
         dict(t_end=1.0, dt=0.0),
         dict(t_end=1.0, dt=0.1, dt_min=0.2),
-        dict(t_end=1.0, dt=0.1, events=EventSteps(0.03, 1.0, lambda problem: 0.0)),
-        dict(t_end=1.0, dt=0.1, events=EventSteps(0.001, 1.0, lambda problem: 0.0)),
+        dict(t_end=1.0, dt=0.1, events=EventSteps(0.03, 1.0, lambda problem: 0.0, 5)),
+        dict(t_end=1.0, dt=0.1, events=EventSteps(0.001, 1.0, lambda problem: 0.0, 5)),
     ],
 )
 def test_bad_run_arguments_raise(kwargs):
@@ -121,7 +121,8 @@ def test_bad_run_arguments_raise(kwargs):
 
 
 @pytest.mark.parametrize(
-    "args", [(0.0, 1.0, lambda p: 0.0), (0.01, 0.0, lambda p: 0.0), (0.01, 1.0, lambda p: 0.0, 0)]
+    "args",
+    [(0.0, 1.0, lambda p: 0.0, 5), (0.01, 0.0, lambda p: 0.0, 5), (0.01, 1.0, lambda p: 0.0, 0)],
 )
 def test_bad_event_steps_raise(args):
     with pytest.raises(ValueError, match="need dt_s > 0, rate > 0 and calm_steps >= 1"):

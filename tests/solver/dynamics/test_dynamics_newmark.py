@@ -125,7 +125,7 @@ def test_energy_conserved_over_1000_steps(beam, modes):
 def test_kept_operators_change_nothing_but_the_cost(beam, modes):
     """Steps alternating between two sizes with both operators kept, then with one
     (``keep_operators(1)``), give the history of a problem that rebuilds its operator at every
-    change of the step, to round-off."""
+    change of the step, to round-off; the operators held are those asked for."""
     V, M, K, bcs = beam
     omega, phi = modes[0]
     dt = 2 * np.pi / omega / 32
@@ -139,9 +139,12 @@ def test_kept_operators_change_nothing_but_the_cost(beam, modes):
         history = []
         for i, h in enumerate(steps * 2):
             if i == len(steps):
+                assert problem.operators_held == kept
                 problem.keep_operators(1)
+                assert problem.operators_held == 1
             assert problem.step(h).converged
             history.append(coordinate(problem)["q"])
+        assert problem.operators_held == 1
         histories.append(np.array(history))
     assert np.max(np.abs(histories[1] - histories[0])) < 1e-10
     with pytest.raises(ValueError, match="operators_kept must be >= 1"):

@@ -230,7 +230,9 @@ def friction_oscillator(
     period = 2 * np.pi / OMEGA
     events = None
     if event_steps_per_period:
-        events = EventSteps(period / event_steps_per_period, SLIDING_RATE, lambda p: centre()[0, 0])
+        events = EventSteps(
+            period / event_steps_per_period, SLIDING_RATE, lambda p: centre()[0, 0], calm_steps=5
+        )
     rows = run(
         problem,
         periods * period,

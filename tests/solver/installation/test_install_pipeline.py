@@ -119,6 +119,24 @@ def test_resume_equals_uninterrupted(uninterrupted, tiny_case, shared_dir):
     )
 
 
+def test_self_weight_with_event_steps_checkpoints_at_its_end_only(tiny_case, shared_dir):
+    """With event steps the self-weight stage runs in one call of the time loop, so that its
+    step size, calm steps and grid do not restart at a checkpoint: its first checkpoint is at
+    its end, whatever output.checkpoint_every (3 steps in the tiny case; the stage has 7). A run
+    resumed from there keeps one step size's operators."""
+    case = tiny_case("self_weight.event_dt_s=0.001")
+    out = shared_dir("install_event_steps")
+    killed = Installation(MPI.COMM_WORLD, case, out, progress=False)
+    assert killed.run(stop_after_checkpoints=1) == {}
+    manifest = checkpoint.read_manifest(out / "checkpoint", MPI.COMM_WORLD)
+    assert manifest["next_stage"] == 1 and manifest["next_chunk"] == 0
+    assert manifest["time_s"] == pytest.approx(case.self_weight.duration_s)
+    assert min(r["dt_s"] for r in killed.history) == pytest.approx(0.001)  # events were taken
+    resumed = Installation(MPI.COMM_WORLD, case, out, progress=False)
+    resumed.run(resume=True)
+    assert resumed.model.problem.operators_kept == 1  # the second step size's only in stage 0
+
+
 #: on the coarse frictional joint of the default run (mu 0.5/0.4, d_c = 100 s/m): a 0.1 s ramp in
 #: 10 ms steps (the TP lands at 0.06 s and slides), checkpoints every 4 steps
 FRICTIONAL = [
