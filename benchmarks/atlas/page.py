@@ -38,7 +38,8 @@ best mode and the control, 0.05 s each), the friction half of S6, S8 and S5's re
 end of the ramp a pull between the pull-out forces with mu_d and with mu_s minus 3.6 kN alone,
 then with 3.6 kN at the best mode) run in the test suite (`make test`,
 `tests/solver/installation/test_install_scenarios.py`, serial and on 2 ranks) on the default
-joint with an 80 mm contact zone and the self-weight ramped over 1 s (`cases/suite.toml`). In
+joint with the stepping of `cases/scaled_lagged.toml`, an 80 mm contact zone and the
+self-weight ramped over 1 s (`cases/suite.toml`). In
 the 2-rank run of `make test` from a fresh clone (its slowest tests are listed in
 `build/Testing/Temporary/LastTest.log`) the ramp with its two modal analyses takes 3.6 min, the
 low-friction ramp 4.3 min, the two-stage S2 6.5 min and S5's release 7.9 min. What they measure
