@@ -40,6 +40,19 @@ class EventSteps:
             )
 
 
+def check_event_step(dt: float, dt_s: float, dt_min: float) -> None:
+    """Raise ValueError unless the step within events dt_s [s] divides the nominal step dt [s]
+    and is at least the smallest cut step dt_min [s]."""
+    ratio = dt / dt_s
+    if ratio < 1 - 1e-9 or abs(ratio - round(ratio)) > 1e-9 * ratio:
+        raise ValueError(f"the step within events ({dt_s} s) must divide the step dt = {dt} s")
+    if dt_s < dt_min:
+        raise ValueError(
+            f"the step within events ({dt_s} s) lies below the smallest cut step "
+            f"dt_min = {dt_min} s"
+        )
+
+
 def _saved_state(problem: Elastodynamics) -> dict:
     return {key: value.copy() for key, value in problem.state_arrays().items()}
 
@@ -82,12 +95,7 @@ def run(
     if not 0 < dt_min <= dt:
         raise ValueError(f"need 0 < dt_min <= dt, got dt_min={dt_min} s, dt={dt} s")
     if events is not None:
-        ratio = dt / events.dt_s
-        if abs(ratio - round(ratio)) > 1e-9 * ratio or not dt_min <= events.dt_s <= dt:
-            raise ValueError(
-                f"the step within events ({events.dt_s} s) must divide the step dt = {dt} s "
-                f"and be at least the smallest cut step dt_min = {dt_min} s"
-            )
+        check_event_step(dt, events.dt_s, dt_min)
     comm = problem.V.mesh.comm
     bar = None
     if progress and comm.rank == 0:

@@ -17,6 +17,7 @@ from geometry.parameters import JointGeometry, MeshOptions, geometry_from_case
 from solver.contact import FrictionLaw
 from solver.dynamics.loads import Schedule
 from solver.dynamics.schemes import Scheme, scheme_from_name
+from solver.dynamics.time_loop import check_event_step
 from solver.installation.planning import check_time_scheme
 from solver.installation.settings import (
     ContactSettings,
@@ -114,11 +115,14 @@ class InstallationCase:
                 )
             check_time_scheme(settings["time"], settings["damping"])
             sw, smallest = settings["self_weight"], settings["time"].dt_min_fraction
-            if sw.event_dt_s and sw.event_dt_s < smallest * sw.dt_s:
-                raise ValueError(
-                    f"[self_weight] event_dt_s = {sw.event_dt_s} s lies below the smallest cut "
-                    f"step dt_s * time.dt_min_fraction = {smallest * sw.dt_s} s"
-                )
+            if sw.event_dt_s:
+                try:
+                    check_event_step(sw.dt_s, sw.event_dt_s, smallest * sw.dt_s)
+                except ValueError as error:
+                    raise ValueError(
+                        f"[self_weight] event_dt_s = {sw.event_dt_s} s: {error} "
+                        "([self_weight] dt_s, dt_s * time.dt_min_fraction)"
+                    ) from None
             imperfections = _imperfections(case, joint)
             if vib.forcing == "shaker" and not 0 <= vib.shaker_height_m <= joint.tp.total_length:
                 raise ValueError(

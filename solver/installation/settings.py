@@ -169,17 +169,11 @@ class SelfWeightSettings:
             )
         if not 0 < self.dt_s <= self.ramp_time_s + self.hold_s:
             raise ValueError(f"dt_s must lie in (0, ramp_time_s + hold_s], got {self.dt_s} s")
-        if self.event_dt_s:
-            ratio = self.dt_s / self.event_dt_s
-            if not (
-                self.event_dt_s > 0 and ratio >= 1 and abs(ratio - round(ratio)) < 1e-9 * ratio
-            ):
-                raise ValueError(
-                    f"event_dt_s must be 0 or divide dt_s = {self.dt_s} s, got {self.event_dt_s} s"
-                )
+        if not self.event_dt_s >= 0:
+            raise ValueError(f"event_dt_s must be 0 (none) or positive, got {self.event_dt_s} s")
         if not self.event_rate_mm_s > 0:
             raise ValueError(f"event_rate_mm_s must be positive, got {self.event_rate_mm_s}")
-        if not (isinstance(self.event_calm_steps, int) and self.event_calm_steps >= 1):
+        if not (type(self.event_calm_steps) is int and self.event_calm_steps >= 1):
             raise ValueError(
                 f"event_calm_steps must be an integer >= 1, got {self.event_calm_steps!r}"
             )
