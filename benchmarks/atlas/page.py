@@ -19,7 +19,8 @@ written by
     mpirun -n 2 python benchmarks/scenarios.py --all          # or a list: S1 S8
     mpirun -n 2 python benchmarks/scenarios.py --all --installed output/install
 
-which runs the scenarios, keeps each one's outputs in `output/atlas/<scenario>/` (runs that
+which runs the scenarios on the default case (`--case` and `--set` choose another; the joint
+of each row below names the case and the overrides it ran with), keeps each one's outputs in `output/atlas/<scenario>/` (runs that
 scenarios share, in `output/atlas/runs/`, are made once) and rebuilds this page from all the
 scenarios found there; the other scenarios' rows are their last outcomes written to this page,
 kept in `docs/scenarios/<scenario>.json`. With `--installed RUN` (the output folder of a `demos/install.py` run
