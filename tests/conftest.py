@@ -1,6 +1,7 @@
 """Shared pytest set-up: the DOLFINx stack loaded in the right order first; the ``--slow``
-option; garbage collection and PETSc clean-up after every test; temporary folders that every
-MPI rank shares; the test cases of ``cases/``; the demos' entry points."""
+option and the serial run's skip of the ``parallel_only`` tests; garbage collection and PETSc
+clean-up after every test; temporary folders that every MPI rank shares; the test cases of
+``cases/``; the demos' entry points."""
 
 import gc
 import importlib.util
@@ -28,12 +29,15 @@ def pytest_addoption(parser):
 
 
 def pytest_collection_modifyitems(config, items):
-    if config.getoption("--slow"):
-        return
-    skip = pytest.mark.skip(reason="marked slow: runs with pytest --slow")
+    slow = pytest.mark.skip(reason="marked slow: runs with pytest --slow")
+    serial = pytest.mark.skip(
+        reason="marked parallel_only: runs with mpiexec -n 2 python -m mpi4py -m pytest -m mpi"
+    )
     for item in items:
-        if item.get_closest_marker("slow"):
-            item.add_marker(skip)
+        if item.get_closest_marker("slow") and not config.getoption("--slow"):
+            item.add_marker(slow)
+        if item.get_closest_marker("parallel_only") and MPI.COMM_WORLD.size == 1:
+            item.add_marker(serial)
 
 
 @pytest.fixture(autouse=True)

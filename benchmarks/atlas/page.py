@@ -19,27 +19,27 @@ written by
     mpirun -n 2 python benchmarks/scenarios.py --all          # or a list: S1 S8
     mpirun -n 2 python benchmarks/scenarios.py --all --installed output/install
 
-which runs the scenarios on the default case (`--case` and `--set` choose another; the joint
-of each row below names the case and the overrides it ran with), keeps each one's outputs in `output/atlas/<scenario>/` (runs that
-scenarios share, in `output/atlas/runs/`, are made once) and rebuilds this page from all the
-scenarios found there; the other scenarios' rows are their last outcomes written to this page,
-kept in `docs/scenarios/<scenario>.json`. With `--installed RUN` (the output folder of a `demos/install.py` run
-of the same case on as many ranks), S2 and S4 read that run's stages (those up to its last
-checkpoint: all of them once it has finished), and S3, S4, S5 and S8 also start from the installed
-state: the run's last checkpoint, after its last completed stage; S8 also after each vibration stage whose
-state the run kept (`--set output.stage_states=true`), as the stage left it and brought to rest; S4
-also reads the run's modal table. The installation run's own time (the sum of its
-stages' wall times) counts in S2 only (docs/install.md, "Cost"). A verdict is "reproduced"
-or "not reproduced" where the criterion is a test, "measured" where it is a figure to report,
-"not run" where the run it needs was not made.
+which runs the scenarios on the default case (`--case` and `--set` choose another; the joint of each
+row below names the case and the overrides it ran with), keeps each one's outputs in
+`output/atlas/<scenario>/` (runs that scenarios share, in `output/atlas/runs/`, are made once) and
+rebuilds this page from all the scenarios found there; the other scenarios' rows are their last
+outcomes written to this page, kept in `docs/scenarios/<scenario>.json`. With `--installed RUN` (the
+output folder of a `demos/install.py` run of the same case on as many ranks), S2 and S4 read that
+run's stages (those up to its last checkpoint: all of them once it has finished), and S3, S4, S5 and
+S8 also start from the installed state: the run's last checkpoint, after its last completed stage;
+S8 also after each vibration stage whose state the run kept (`--set output.stage_states=true`), as
+the stage left it and brought to rest; S4 also reads the run's modal table. The installation run's
+own time (the sum of its stages' wall times) counts in S2 only (docs/install.md, "Cost"). A verdict
+is "reproduced" or "not reproduced" where the criterion is a test, "measured" where it is a figure
+to report, "not run" where the run it needs was not made.
 Wall times are on {ranks} MPI rank(s) of the machine that ran it.
 
 Shortened, S1, the two-stage S2 (from the end of the ramp a lead-in at the control, then the
 best mode and the control, 0.05 s each), the friction half of S6, S8 and S5's release (from the
 end of the ramp a pull between the pull-out forces with mu_d and with mu_s minus 3.6 kN alone,
 then with 3.6 kN at the best mode) run in the test suite (`make test`,
-`tests/solver/installation/test_install_scenarios.py`, serial and on 2 ranks) on the default
-joint with the stepping of `cases/scaled_lagged.toml`, an 80 mm contact zone and the
+`tests/solver/installation/test_install_scenarios.py`, on 2 ranks; the serial run skips them) on
+the default joint with the stepping of `cases/scaled_lagged.toml`, an 80 mm contact zone and the
 self-weight ramped over 1 s (`cases/suite.toml`). In
 the 2-rank run of `make test` from a fresh clone (its slowest tests are listed in
 `build/Testing/Temporary/LastTest.log`) the ramp with its two modal analyses takes 3.6 min, the

@@ -53,7 +53,9 @@ from solver.installation.case import InstallationCase
 from solver.installation.model import JointModel, set_up_joint_model, settled_modes
 from solver.post.report import SELECTIVE, stick_slip_events
 
-pytestmark = pytest.mark.mpi
+# on 2 ranks only: the physics each verdict judges does not depend on the ranks, and the serial
+# twin of these runs would double the suite's longest file (docs/install.md, design decisions)
+pytestmark = [pytest.mark.mpi, pytest.mark.parallel_only]
 
 LOW_FRICTION = ["friction.mu_s=0.0625", "friction.mu_d=0.05"]
 N_MODES = 6
