@@ -46,7 +46,12 @@ from solver.dynamics.newton import NewtonResult
 from solver.dynamics.relaxation import CoefficientRelaxation
 from solver.dynamics.residual import contact_residual, dirichlet_rows
 from solver.dynamics.traction_jacobian import TractionJacobian
-from solver.dynamics.tractions import pointwise_law, solve_tractions, traction_residual
+from solver.dynamics.tractions import (
+    Evaluation,
+    pointwise_law,
+    solve_tractions,
+    traction_residual,
+)
 
 __all__ = ["PointNewtonSolver"]
 
@@ -176,22 +181,23 @@ class PointNewtonSolver:
         y_free: npt.NDArray,
         normal: npt.NDArray,
         mu: npt.NDArray,
-    ) -> list[npt.NDArray]:
-        """The inner problem's starts, in order: of the iterate's tractions y_k and the last inner
-        solution (points appended since then at y_k) the one with the smaller ||Phi|| (with the
-        jacobian's G) first (within a step, y_k; at a new step's first iteration often the last
-        solution, nearer in stick and slip than the predictor's), then the other, then y_free
-        (the tractions if the multipliers kept their values: for every point open, where the
-        first step from y_k closes them all at once)."""
+    ) -> list[tuple[npt.NDArray, Evaluation | None]]:
+        """The inner problem's starts, in order, with the residual at each where it was evaluated
+        (with the jacobian's G): of the iterate's tractions y_k and the last inner solution
+        (points appended since then at y_k) the one with the smaller ||Phi|| first (within a
+        step, y_k; at a new step's first iteration often the last solution, nearer in stick and
+        slip than the predictor's), then the other, then y_free (the tractions if the
+        multipliers kept their values: for every point open, where the first step from y_k
+        closes them all at once)."""
         if self._last_y is None:
-            return [y_k, y_free]
+            return [(y_k, None), (y_free, None)]
         last = y_k.copy()
         last[: len(self._last_y)] = self._last_y
-        phi_k, phi_last = (
-            np.abs(traction_residual(self.jacobian, y, y_free, normal, mu)[3]).max(initial=0.0)
-            for y in (y_k, last)
+        at_k, at_last = (
+            (y, traction_residual(self.jacobian, y, y_free, normal, mu)) for y in (y_k, last)
         )
-        return [last, y_k, y_free] if phi_last < phi_k else [y_k, last, y_free]
+        nearer = np.abs(at_last[1][3]).max(initial=0.0) < np.abs(at_k[1][3]).max(initial=0.0)
+        return [at_last, at_k, (y_free, None)] if nearer else [at_k, at_last, (y_free, None)]
 
     def _update_points(self, contact: NitscheContact, first: bool) -> None:
         """Fit the candidates and the master band to the contact (collective).
@@ -370,7 +376,7 @@ class PointNewtonSolver:
                 - compliance.apply_E(d_zone, M_b)
                 + self.jacobian.times(lam_k, np.flatnonzero(law_k.active))
             )
-            for y0 in self._starts(y_k, y_free, normal, mu_inner):
+            for y0, evaluated in self._starts(y_k, y_free, normal, mu_inner):
                 solution = solve_tractions(
                     G,
                     y_free,
@@ -380,6 +386,7 @@ class PointNewtonSolver:
                     self.traction_rtol,
                     self.traction_iterations,
                     jacobian=self.jacobian,
+                    evaluated=evaluated,
                 )
                 if solution.converged:
                     self._last_y = solution.y

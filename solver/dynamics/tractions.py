@@ -17,6 +17,7 @@ from solver.contact.law import Multipliers, derivative, multipliers
 from solver.dynamics.traction_jacobian import TractionJacobian
 
 __all__ = [
+    "Evaluation",
     "TractionSolution",
     "pointwise_law",
     "solve_tractions",
@@ -48,13 +49,17 @@ def pointwise_law(
     return P_t, multipliers(P_n, P_t, mu)
 
 
+#: P_t, the multipliers, lambda as a vector and Phi at some y (:func:`traction_residual`)
+Evaluation = tuple[npt.NDArray, Multipliers, npt.NDArray, npt.NDArray]
+
+
 def traction_residual(
     jacobian: TractionJacobian,
     y: npt.NDArray,
     y_free: npt.NDArray,
     normal: npt.NDArray,
     mu: npt.NDArray,
-) -> tuple[npt.NDArray, Multipliers, npt.NDArray, npt.NDArray]:
+) -> Evaluation:
     """Phi(y) = y - y_free + G lambda(y) [Pa] with the jacobian's G, and P_t and the multipliers
     at y (as ``pointwise_law``; lambda also as a vector, 3 per point)."""
     P_t, lam = pointwise_law(y, normal, mu)
@@ -87,6 +92,7 @@ def solve_tractions(
     max_backtracks: int = 12,
     jacobian: TractionJacobian | None = None,
     restarts: int = 2,
+    evaluated: Evaluation | None = None,
 ) -> TractionSolution:
     """Solve Phi(y) = y - y_free + G lambda(y) = 0 for the trial tractions y [Pa] of points with
     normals ``normal`` (np, 3) and friction coefficients ``mu`` (np,), from y0.
@@ -98,17 +104,18 @@ def solve_tractions(
     stick: Newton stalls with every point slipping), the iteration restarts from
     :func:`stick_restart` of its iterate, at most ``restarts`` times. Converged when
     ||Phi|| <= rtol max(||y_free||, ||y||) (infinity norms). ``jacobian``: kept by the caller
-    between calls for the same points, so that its factors are reused.
+    between calls for the same points, so that its factors are reused. ``evaluated``:
+    :func:`traction_residual` at y0 with this G, where the caller has it already.
     """
     if jacobian is None:
         jacobian = TractionJacobian()
     jacobian.set_compliance(G)
 
-    def evaluate(y: npt.NDArray) -> tuple[npt.NDArray, Multipliers, npt.NDArray, npt.NDArray]:
+    def evaluate(y: npt.NDArray) -> Evaluation:
         return traction_residual(jacobian, y, y_free, normal, mu)
 
     y = y0.copy()
-    P_t, lam, lam_y, phi = evaluate(y)
+    P_t, lam, lam_y, phi = evaluate(y) if evaluated is None else evaluated
     norm = float(np.linalg.norm(phi))
     scale = max(np.abs(y_free).max(initial=0.0), np.abs(y).max(initial=0.0), 1.0)
     for iteration in range(max_iterations + 1):
