@@ -36,8 +36,11 @@ def pytest_collection_modifyitems(config, items):
     for item in items:
         if item.get_closest_marker("slow") and not config.getoption("--slow"):
             item.add_marker(slow)
-        if item.get_closest_marker("parallel_only") and MPI.COMM_WORLD.size == 1:
-            item.add_marker(serial)
+        if item.get_closest_marker("parallel_only"):
+            if not item.get_closest_marker("mpi"):
+                raise pytest.UsageError(f"{item.nodeid}: parallel_only needs the mark mpi too")
+            if MPI.COMM_WORLD.size == 1:
+                item.add_marker(serial)
 
 
 @pytest.fixture(autouse=True)

@@ -87,7 +87,8 @@ class ContactCompliance:
     Args:
         A: the operator on the zone (zone numbering: the zone's dofs rank by rank), symmetric.
         zone_dofs: the zone's global dofs (of the full space) in zone order, on every rank.
-        lu_solver: PETSc factorisation package.
+        lu_solver: PETSc factorisation package; PETSc options under the prefix ``compliance_``
+            apply to the factorisation (e.g. ``-compliance_mat_mumps_icntl_7 5``).
         width: right-hand sides per multiple-right-hand-side solve (fewer when fewer columns are
             asked for, except with SuperLU_DIST, whose repeated solves need the same width);
             MUMPS takes them sparse.
@@ -101,7 +102,7 @@ class ContactCompliance:
         self.width = width
         self._fixed_width = lu_solver == "superlu_dist"
         self._sparse = lu_solver == "mumps"  # sparse right-hand sides (solve_columns)
-        self.lu = direct_solver(self.comm, A, lu_solver)
+        self.lu = direct_solver(self.comm, A, lu_solver, prefix="compliance_")
         self.lu.setUp()
         self.points = 0  #: contact points of the blocks (all ranks)
         #: master band: global dofs in the order of the blocks' band rows and columns

@@ -196,7 +196,7 @@ class PointNewtonSolver:
         at_k, at_last = (
             (y, traction_residual(self.jacobian, y, y_free, normal, mu)) for y in (y_k, last)
         )
-        nearer = np.abs(at_last[1][3]).max(initial=0.0) < np.abs(at_k[1][3]).max(initial=0.0)
+        nearer = np.abs(at_last[1].phi).max(initial=0.0) < np.abs(at_k[1].phi).max(initial=0.0)
         return [at_last, at_k, (y_free, None)] if nearer else [at_k, at_last, (y_free, None)]
 
     def _update_points(self, contact: NitscheContact, first: bool) -> None:

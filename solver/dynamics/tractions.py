@@ -9,6 +9,7 @@ section 6a, "Inner problem").
 """
 
 from dataclasses import dataclass
+from typing import NamedTuple
 
 import numpy as np
 import numpy.typing as npt
@@ -49,8 +50,13 @@ def pointwise_law(
     return P_t, multipliers(P_n, P_t, mu)
 
 
-#: P_t, the multipliers, lambda as a vector and Phi at some y (:func:`traction_residual`)
-Evaluation = tuple[npt.NDArray, Multipliers, npt.NDArray, npt.NDArray]
+class Evaluation(NamedTuple):
+    """The pointwise law and Phi at trial tractions y (:func:`traction_residual`)."""
+
+    P_t: npt.NDArray  #: tangential trial tractions (np, 3) [Pa]
+    law: Multipliers  #: the multipliers and each point's state
+    lam: npt.NDArray  #: the multipliers as a vector, 3 per point [Pa]
+    phi: npt.NDArray  #: Phi(y), 3 per point [Pa]
 
 
 def traction_residual(
@@ -64,7 +70,9 @@ def traction_residual(
     at y (as ``pointwise_law``; lambda also as a vector, 3 per point)."""
     P_t, lam = pointwise_law(y, normal, mu)
     lam_y = lam.vector(normal).ravel()
-    return P_t, lam, lam_y, y - y_free + jacobian.times(lam_y, np.flatnonzero(lam.active))
+    return Evaluation(
+        P_t, lam, lam_y, y - y_free + jacobian.times(lam_y, np.flatnonzero(lam.active))
+    )
 
 
 def stick_restart(y: npt.NDArray, normal: npt.NDArray, mu: npt.NDArray) -> npt.NDArray:
@@ -105,7 +113,8 @@ def solve_tractions(
     :func:`stick_restart` of its iterate, at most ``restarts`` times. Converged when
     ||Phi|| <= rtol max(||y_free||, ||y||) (infinity norms). ``jacobian``: kept by the caller
     between calls for the same points, so that its factors are reused. ``evaluated``:
-    :func:`traction_residual` at y0 with this G, where the caller has it already.
+    :func:`traction_residual` at y0 with this G, y_free, normal and mu, where the caller has
+    it already.
     """
     if jacobian is None:
         jacobian = TractionJacobian()

@@ -31,7 +31,7 @@ from solver.contact.model import Status
 from solver.dynamics.compliance import ContactCompliance
 from solver.dynamics.loads import Schedule
 from solver.dynamics.relaxation import CoefficientRelaxation
-from solver.dynamics.tractions import solve_tractions
+from solver.dynamics.tractions import solve_tractions, traction_residual
 from solver.dynamics.traction_jacobian import TractionJacobian
 from solver.dynamics.time_loop import run
 from solver.installation.model import attach_vibration, set_up_joint_model
@@ -68,6 +68,20 @@ def test_uncoupled_points_against_closed_form():
     assert np.allclose(solution.y.reshape(-1, 3), expected, rtol=1e-10, atol=1e-3)
     states = [_closed_form(y_free[p], g[p], normal[p], mu[p]) @ normal[p] < 0 for p in range(n)]
     assert 0 < sum(states) < n  # open and closed points both tested
+
+
+def test_start_with_its_residual_given_repeats_the_solve():
+    """``solve_tractions`` from a start whose residual the caller evaluated (as Newton on the
+    contact points does when it chooses the start) takes the same iterates."""
+    data = np.load(Path(__file__).parent / "data" / "stalling_slip.npz")
+    G, y_free, y0, normal, mu = (data[k] for k in ("G", "y_free", "y0", "normal", "mu"))
+    jacobian = TractionJacobian()
+    jacobian.set_compliance(G)
+    evaluated = traction_residual(jacobian, y0, y_free, normal, mu)
+    given = solve_tractions(G, y_free, y0, normal, mu, jacobian=jacobian, evaluated=evaluated)
+    plain = solve_tractions(G, y_free, y0, normal, mu)
+    assert given.converged and given.iterations == plain.iterations
+    assert np.array_equal(given.y, plain.y)
 
 
 def test_stalled_slip_restarts_stuck():
