@@ -348,17 +348,22 @@ def geometry_from_case(case: dict[str, Any]) -> tuple[JointGeometry, Material, M
     Uses ``[geometry.mp]``, ``[geometry.tp]``, ``[material]`` and ``[mesh]``; other
     tables are ignored; a missing ``[material]`` or ``[mesh]`` gives the defaults.
     """
-    source = case.get("_source", "case")
     try:
-        if "geometry" not in case:
-            raise ValueError("no [geometry] table")
-        return (
-            JointGeometry.from_dict(case["geometry"]),
-            material_from_dict(case.get("material", {})),
-            MeshOptions.from_dict(case.get("mesh", {})),
-        )
+        return geometry_from_tables(case)
     except ValueError as e:
-        raise ValueError(f"{source}: {e}") from None
+        raise ValueError(f"{case.get('_source', 'case')}: {e}") from None
+
+
+def geometry_from_tables(case: dict[str, Any]) -> tuple[JointGeometry, Material, MeshOptions]:
+    """:func:`geometry_from_case` whose ValueError does not name the case file (for callers that
+    name it themselves)."""
+    if "geometry" not in case:
+        raise ValueError("no [geometry] table")
+    return (
+        JointGeometry.from_dict(case["geometry"]),
+        material_from_dict(case.get("material", {})),
+        MeshOptions.from_dict(case.get("mesh", {})),
+    )
 
 
 def load_geometry(

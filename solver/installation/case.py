@@ -13,7 +13,7 @@ from common.case import construct
 from common.material import Material
 from geometry.contact_map import tp_placement
 from geometry.imperfections import RadialDeviation
-from geometry.parameters import JointGeometry, MeshOptions, geometry_from_case
+from geometry.parameters import JointGeometry, MeshOptions, geometry_from_tables
 from solver.contact import FrictionLaw
 from solver.dynamics.loads import Schedule
 from solver.dynamics.schemes import Scheme, scheme_from_name
@@ -83,7 +83,7 @@ class InstallationCase:
                     f"unknown table(s) {sorted(unknown)}; "
                     f"expected some of {sorted(KNOWN_TABLES - {'_source'})}"
                 )
-            joint, material, mesh = geometry_from_case(case)
+            joint, material, mesh = geometry_from_tables(case)
             settings = {}
             for name, kind in SECTIONS.items():
                 data = dict(case.get(name, {}))
