@@ -42,12 +42,19 @@ DROP_SPEED = math.sqrt(2 * GRAVITY * 0.1)  #: TP speed after a 10 cm free fall [
 
 
 def parse_args(argv: list[str] | None) -> argparse.Namespace:
-    p = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    p = argparse.ArgumentParser(description=__doc__.splitlines()[0], allow_abbrev=False)
     p.add_argument(
         "--quick", action="store_true", help="coarse map grid and short runs (smoke test)"
     )
     p.add_argument("--output", default="output/lumped", help="output folder")
     p.add_argument("--case", default="cases/full_scale.toml", help="TOML case file (full scale)")
+    p.add_argument(
+        "--set",
+        action="append",
+        default=[],
+        metavar="TABLE.KEY=VALUE",
+        help="override of --case (its [geometry.mp], [geometry.tp] and [material] are used)",
+    )
     p.add_argument(
         "--scaled-case", default="cases/scaled.toml", help="case whose springs are also printed"
     )
@@ -84,6 +91,8 @@ def parse_args(argv: list[str] | None) -> argparse.Namespace:
     try:
         for mu_d in {args.mu_d} | {case[2] for case in SENSITIVITY_CASES}:
             FrictionLaw(args.mu_s, mu_d, args.d_c)
+        args.joint, args.material, _ = load_geometry(args.case, args.set)
+        args.scaled_joint, args.scaled_material, _ = load_geometry(args.scaled_case)
     except ValueError as e:
         p.error(str(e))
     return args
@@ -127,8 +136,8 @@ def main(argv: list[str] | None = None) -> int:
         return cli.fail(comm, str(e))
     t_start = time.perf_counter()
 
-    joint, material, _ = load_geometry(args.case)
-    scaled_joint, scaled_material, _ = load_geometry(args.scaled_case)
+    joint, material = args.joint, args.material
+    scaled_joint, scaled_material = args.scaled_joint, args.scaled_material
     mass = joint.tp.mass(material)  # kept for all sensitivity cases [kg]
     weight = mass * GRAVITY
 

@@ -76,7 +76,7 @@ def case_parser(
     description: str, output: str, default_case: str, quick_case: str
 ) -> argparse.ArgumentParser:
     """``--case``, ``--set``, ``--quick`` and ``--output``: the options of every demo."""
-    p = argparse.ArgumentParser(description=description)
+    p = argparse.ArgumentParser(description=description, allow_abbrev=False)
     p.set_defaults(default_case=default_case, quick_case=quick_case, named=())
     p.add_argument(
         "--case", help=f"case: a preset name in cases/ or a TOML file (default: {default_case})"

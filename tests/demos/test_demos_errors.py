@@ -57,6 +57,29 @@ def test_bad_options_exit_2_before_computing(demo, options, words, demo_main, sh
             assert w in message, message
 
 
+@pytest.mark.parametrize(
+    "options, words",
+    [
+        (["--case", "no_such_case"], ["no_such_case", "presets"]),
+        (["--set", "geometry.tp.thickness=-1"], ["full_scale.toml", "thickness"]),
+        (["--scaled-case", "no_such_case"], ["no_such_case"]),
+        (["--set", "1"], ["section.key=value"]),
+        (["--settle", "1"], ["unrecognized arguments: --settle"]),  # no abbreviations
+    ],
+)
+def test_lumped_bad_case_exits_2_before_computing(options, words, demo_main, shared_tmp, capsys):
+    """The lumped demo's argument parser (argparse's message and exit code 2) checks its case
+    files and overrides before anything is computed or written."""
+    out = shared_tmp / "out"
+    with pytest.raises(SystemExit) as stop:
+        demo_main("lumped")(options + ["--output", str(out)])
+    assert stop.value.code == 2
+    assert not out.exists()
+    message = capsys.readouterr().err
+    for w in words:
+        assert w in message, message
+
+
 @pytest.mark.parametrize("demo", DEMOS)
 def test_unwritable_output_folder_exits_2_before_computing(demo, demo_main, shared_tmp, capsys):
     """An --output folder below a file cannot be created: error and exit code 2."""
