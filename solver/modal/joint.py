@@ -27,7 +27,7 @@ from common.case import construct
 from common.material import Material
 from geometry import tags
 from geometry.mesh import create_joint_mesh
-from geometry.parameters import JointGeometry, MeshOptions, material_from_dict
+from geometry.parameters import JointGeometry, MeshOptions, geometry_from_tables
 from solver.modal.eigen import EigenOptions, ModalResult, clamp, modal_analysis
 from solver.modal.interface import ContactInterface, bonded_band
 
@@ -90,14 +90,11 @@ class JointCase:
 
     @classmethod
     def from_dict(cls, case: dict[str, Any]) -> "JointCase":
-        if "geometry" not in case:
-            raise ValueError(f"{case.get('_source', 'case')}: no [geometry] table")
-        return cls(
-            JointGeometry.from_dict(case["geometry"]),
-            material_from_dict(case.get("material", {})),
-            MeshOptions.from_dict(case.get("mesh", {})),
-            ModalSettings.from_dict(case.get("modal", {})),
-        )
+        """Check the tables; a ValueError names the case file and the problem."""
+        try:
+            return cls(*geometry_from_tables(case), ModalSettings.from_dict(case.get("modal", {})))
+        except ValueError as e:
+            raise ValueError(f"{case.get('_source', 'case')}: {e}") from None
 
 
 @dataclass

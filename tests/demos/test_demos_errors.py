@@ -41,6 +41,7 @@ WITHOUT_PROGRESS_BAR = ("joint_geometry", "modal", "lumped")
         ("sweep", ["--quick", "--case", "coarse"], ["--quick is --case quick"]),
         ("modal", ["--quick", "--case", "full_scale"], ["--quick is --case modal_quick"]),
         ("joint_geometry", ["--case", "no_such_case"], ["no_such_case", "presets"]),
+        ("modal", ["--set", "mesh.n_circumferential=10"], ["scaled.toml: [mesh]", "multiple of 4"]),
     ],
 )
 def test_bad_options_exit_2_before_computing(demo, options, words, demo_main, shared_tmp, capsys):
