@@ -351,7 +351,7 @@ def format_summary(summary: dict, stages: list[dict], excitations) -> str:
             f"axial friction {summary['friction_force_z_N'] / 1e3:.2f} kN"
         ),
         "excitation frequencies: "
-        + ", ".join(f"{e.frequency_Hz:.1f} Hz ({e.role})" for e in excitations),
+        + (", ".join(f"{e.frequency_Hz:.1f} Hz ({e.role})" for e in excitations) or "none"),
         *format_stabilisation(stages),
         *format_selectivity(frequency_selectivity(stages, excitations)),
         "=" * 78,

@@ -10,6 +10,7 @@ from solver.post.report import (
     SELECTIVE,
     format_selectivity,
     format_stabilisation,
+    format_summary,
     frequency_selectivity,
     late_gain,
     slip_episodes,
@@ -159,6 +160,29 @@ def test_no_control_no_lines():
     stages = [_stage(0, 0.0, 0.0, 2.0, 2.4), _stage(1, 352.0, 2.0, 2.03, 0.05)]
     assert frequency_selectivity(stages, [_excitation(352.0, "modal")]) == []
     assert format_selectivity([]) == []
+
+
+def test_summary_of_a_run_without_vibration_stages():
+    """A run of the self-weight stage alone (no excitation chosen) says so in its summary."""
+    summary = {
+        "total_settlement_mm": 2.4,
+        "stick_slip_events": 3,
+        "steps": 210,
+        "end_time_s": 2.1,
+        "normal_force_N": 2e4,
+        "friction_force_z_N": 9e3,
+        "stick_fraction": 0.5,
+        "slip_fraction": 0.1,
+        "open_fraction": 0.4,
+    }
+    stage = _stage(0, 0.0, 0.0, 2.1, 2.4) | {
+        "name": "self-weight",
+        "settlement_end_mm": 2.4,
+        "stick_slip_events": 3,
+        "newton_iterations_mean": 2.0,
+    }
+    text = format_summary(summary, [stage], [])
+    assert "excitation frequencies: none" in text.splitlines()
 
 
 def test_stabilisation_lines_sort_the_vibration_stages():
