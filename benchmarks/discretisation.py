@@ -10,7 +10,7 @@ time per step of the first 0.3 s of the self-weight stage with the case's contac
 TP lands and starts to slide).
 Prints a markdown table.
 
-    mpirun -n 2 python benchmarks/discretisation.py
+    mpirun -n 2 python benchmarks/discretisation.py [--case CASE] [--set TABLE.KEY=VALUE ...]
 """
 
 import argparse
@@ -69,12 +69,19 @@ def measure(comm: MPI.Comm, case: InstallationCase) -> dict:
 def main(argv=None) -> int:
     p = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     p.add_argument("--case", default="scaled", help="case file or preset name in cases/")
+    p.add_argument(
+        "--set",
+        action="append",
+        default=[],
+        metavar="TABLE.KEY=VALUE",
+        help="case override, for every discretisation",
+    )
     a = p.parse_args(argv)
     comm = MPI.COMM_WORLD
     say = print if comm.rank == 0 else (lambda *args, **kw: None)
     rows = []
     for label, overrides in DISCRETISATIONS:
-        r = measure(comm, InstallationCase.from_dict(read_case(a.case, overrides)))
+        r = measure(comm, InstallationCase.from_dict(read_case(a.case, a.set + overrides)))
         rows.append((label, r))
         gc.collect()  # the last model's PETSc objects, before the next (larger) one
         PETSc.garbage_cleanup(comm)

@@ -56,7 +56,8 @@ def main(argv=None) -> int:
         default=[],
         metavar="TABLE.KEY=VALUE",
         help="case override of the stage only (e.g. time.steps_per_period, "
-        "contact.lagged_friction): the settled state of --checkpoint is the one of --set",
+        "contact.lagged_friction): the settled state of --checkpoint or --installed is the "
+        "one of --set",
     )
     p.add_argument("--frequency", type=float, default=68.0, help="forcing frequency [Hz]")
     p.add_argument("--amplitude", default="eccentric", help='force amplitude [N] or "eccentric"')
@@ -65,7 +66,7 @@ def main(argv=None) -> int:
         "--checkpoint",
         default=None,
         help="folder of the settled state: restored if it exists, else written after settling "
-        "(--stage-set needs it to exist)",
+        "(without --installed, --stage-set needs it to exist)",
     )
     p.add_argument(
         "--installed",
@@ -85,10 +86,8 @@ def main(argv=None) -> int:
         p.error("--frequency and --steps must be positive")
     if a.stage is not None and a.installed is None:
         p.error("--stage needs --installed")
-    if a.stage_set and (
-        a.installed is not None or not (a.checkpoint and Path(a.checkpoint).exists())
-    ):
-        p.error("--stage-set needs the settled state of an existing --checkpoint")
+    if a.stage_set and a.installed is None and not (a.checkpoint and Path(a.checkpoint).exists()):
+        p.error("--stage-set needs --installed or the settled state of an existing --checkpoint")
     amplitude = a.amplitude if a.amplitude == "eccentric" else float(a.amplitude)
     comm = MPI.COMM_WORLD
     say = print if comm.rank == 0 else (lambda *args, **kw: None)
@@ -98,7 +97,7 @@ def main(argv=None) -> int:
         p.error(str(err))
     if a.installed is not None:
         try:
-            model = restore_installed(comm, a.case, a.set, a.installed, a.stage)[0]
+            model = restore_installed(comm, a.case, a.set, a.installed, a.stage, a.stage_set)[0]
         except (ValueError, FileNotFoundError) as err:
             p.error(str(err))
     else:

@@ -84,12 +84,16 @@ def restore_installed(
     overrides: list[str],
     run_folder: Path,
     stage: int | None = None,
+    stage_overrides: list[str] | None = None,
 ) -> tuple[JointModel, list[Excitation], list[float]]:
     """The joint restored from the last checkpoint of the installation run in ``run_folder`` (or
     from the state it kept after ``stage``), that run's excitations and natural frequencies
-    [Hz] (collective)."""
+    [Hz] (collective). The run must be of the case with ``overrides``; the joint is set up
+    with ``stage_overrides`` on top (settings of what follows, e.g. ``contact.lagged_friction``)."""
     case = InstallationCase.from_dict(read_case(case_name, overrides))
     manifest = installed_state(comm, case, run_folder, stage)
+    if stage_overrides:
+        case = InstallationCase.from_dict(read_case(case_name, overrides + stage_overrides))
     model = set_up_joint_model(comm, case)
     checkpoint.restore(_state_folder(run_folder, stage), model.problem)
     excitations = [Excitation(**e) for e in manifest["excitations"]]
