@@ -19,7 +19,6 @@ from benchmarks.atlas.page import write_page
 from benchmarks.atlas.selectivity import selectivity_ratio
 from benchmarks.scenarios import main
 from solver.dynamics.loads import eccentric_amplitude
-from solver.installation.runner import Installation
 
 pytestmark = pytest.mark.mpi
 
@@ -75,15 +74,6 @@ def test_atlas_runs_scenarios_and_rebuilds_its_page(atlas_output):
         ]
         write_page(out / "no_runs", page)
         assert page.read_text() == text
-
-
-@pytest.fixture(scope="module")
-def installed(tiny_case, shared_dir):
-    """The output folder of an installation run of the tiny joint, with its stage states."""
-    out = shared_dir("installed")
-    case = tiny_case("output.stage_states=true")
-    Installation(MPI.COMM_WORLD, case, out, progress=False).run()
-    return out
 
 
 def test_s2_s4_s5_s8_from_the_installed_state(installed, atlas_output, tiny_case):
