@@ -16,7 +16,7 @@ def test_stage_settings_apply_to_the_installed_state(installed, capsys):
     out = capsys.readouterr().out
     if MPI.COMM_WORLD.rank == 0:  # the benchmark prints on rank 0
         assert "dt = 2.000e-03 s" in out  # 1 / (50 Hz x 10)
-        assert "2 steps:" in out
+        assert "steps:" in out and "step / solve" in out  # the stage ran to its end
 
 
 def test_a_run_of_another_case_is_refused(installed, capsys):
