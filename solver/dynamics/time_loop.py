@@ -1,9 +1,11 @@
 """The time loop: integrate an ``Elastodynamics`` problem over an interval with step cutting.
 
 On Newton failure the step is halved and retried, and grows back after a few accepted
-steps (:func:`run`). With ``EventSteps`` a step during which a measure of the state (e.g. the
-settlement) moves faster than a given rate is retaken in finer steps until it rests again:
-the events of a stick-slip staircase are resolved while the steps between them stay long.
+steps where the time lies on the grid of the grown step (:func:`run`), so that the steps keep
+to their grids and the interval's end. With ``EventSteps`` a step during which a measure of
+the state (e.g. the settlement) moves faster than a given rate, or whose Newton fails, is
+retaken in finer steps until it rests again: the events of a stick-slip staircase are
+resolved while the steps between them stay long.
 Observers add their values (keys carry units) to each step's row.
 """
 
@@ -20,9 +22,9 @@ Observer = Callable[[Elastodynamics], dict[str, float]]
 @dataclass(frozen=True)
 class EventSteps:
     """Fine steps within events: a step longer than ``dt_s`` [s] during which ``measure`` moved
-    faster than ``rate`` (its unit per s) is retaken in steps of ``dt_s``; the nominal step
-    resumes at the first time on its grid after ``calm_steps`` fine steps below the rate (at
-    once if a cut step left the time off the grid of dt_s; the nominal grid restarts there).
+    faster than ``rate`` (its unit per s), or whose Newton failed, is retaken in steps of
+    ``dt_s``; the nominal step resumes at the first time on its grid after ``calm_steps`` fine
+    steps below the rate.
 
     The nominal step must be a whole multiple of ``dt_s``, so that both step sizes keep their
     operators (``Elastodynamics(operators_kept=2)`` refactorises nothing on a switch)."""
@@ -57,14 +59,10 @@ def _saved_state(problem: Elastodynamics) -> dict:
     return {key: value.copy() for key, value in problem.state_arrays().items()}
 
 
-def _may_resume(elapsed: float, dt: float, dt_s: float) -> bool:
-    """Whether the nominal step dt may resume after ``elapsed`` [s] on the nominal grid: on that
-    grid, or off the fine grid of dt_s (a cut step moved it; the grid then restarts here)."""
-
-    def on(grid: float) -> bool:
-        return abs(elapsed / grid - round(elapsed / grid)) < 1e-6
-
-    return on(dt) or not on(dt_s)
+def _on_grid(elapsed: float, step: float) -> bool:
+    """Whether ``elapsed`` [s] is a whole number of steps ``step`` [s], to the round-off that a
+    time summed step by step carries (1e-9 relative: within it for 10^7 steps)."""
+    return abs(elapsed - round(elapsed / step) * step) <= 1e-9 * max(elapsed, step)
 
 
 def run(
@@ -80,8 +78,11 @@ def run(
 ) -> list[dict[str, float]]:
     """Integrate from problem.t to t_end [s] with nominal step dt [s].
 
-    On Newton failure the step is halved and retried; after ``growth_after`` accepted
-    steps it doubles again (up to dt, or up to ``events.dt_s`` within an event). Below dt_min
+    On Newton failure the step is halved and retried (with ``events``, a step longer than
+    ``events.dt_s`` is retaken in steps of it); after ``growth_after`` accepted steps it doubles
+    again at the first time on the grid of the doubled step (up to dt, or up to ``events.dt_s``
+    within an event), so that a step of size h starts on the grid t + k h of the start time t
+    (but the last, shortened to reach t_end). Below dt_min
     (default dt/64) a RuntimeError names the time and step. Each accepted step records time_s,
     dt_s, newton_iterations and every observer's values (keys carry units, e.g.
     settlement_mm); each row is passed to ``on_row`` as it is produced (e.g.
@@ -106,7 +107,7 @@ def run(
             unit="s",
             bar_format="{l_bar}{bar}| {n:.4g}/{total:.4g} s {postfix}",
         )
-    t_grid = problem.t  # the nominal steps' grid: t_grid + k dt
+    t_start = problem.t  # every step of size h starts on the grid t_start + k h
     measured = events.measure(problem) if events is not None else 0.0
     rows, h, h_max, accepted, calm = [], dt, dt, 0, 0
     try:
@@ -119,8 +120,12 @@ def run(
                 t_old, before = problem.t, _saved_state(problem)
             result = problem.step(step)
             if not result.converged:
-                h = step / 2
                 accepted = 0
+                if events is not None and step > events.dt_s * (1 + 1e-9):
+                    h = h_max = events.dt_s  # retaken as an event
+                    calm = 0
+                    continue
+                h = step / 2
                 if h < dt_min:
                     raise RuntimeError(
                         f"Newton did not converge at t = {problem.t:.6g} s even with dt = {step:.3g} s "
@@ -137,13 +142,9 @@ def run(
                     accepted = calm = 0
                     continue
                 measured, calm = now, 0 if fast else calm + 1
-                if (
-                    h_max < dt
-                    and calm >= events.calm_steps
-                    and _may_resume(problem.t - t_grid, dt, events.dt_s)
-                ):
+                if h_max < dt and calm >= events.calm_steps and _on_grid(problem.t - t_start, dt):
                     h = h_max = dt
-                    accepted, t_grid = 0, problem.t
+                    accepted = 0
             row = {"time_s": problem.t, "dt_s": step, "newton_iterations": result.iterations}
             for observe in observers:
                 row.update(observe(problem))
@@ -156,7 +157,7 @@ def run(
                     {k: f"{v:.4g}" for k, v in row.items() if k != "time_s"}, refresh=False
                 )
             accepted += 1
-            if h < h_max and accepted >= growth_after:
+            if h < h_max and accepted >= growth_after and _on_grid(problem.t - t_start, 2 * h):
                 h, accepted = min(2 * h, h_max), 0
     finally:
         if bar is not None:

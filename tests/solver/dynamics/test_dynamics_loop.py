@@ -86,23 +86,40 @@ class EventfulProblem(FlakyProblem):
         self.t = t
 
 
-def test_nominal_step_resumes_after_a_cut_within_an_event():
+def test_cut_steps_within_an_event_keep_to_the_grids():
     """Steps of 0.1 s, events at 0.01 s (rate 0.3 m/s); within the event Newton fails at
     0.407 s for steps above 0.004 s: 0.01 s is cut to 0.005 s, which passes once (to 0.405 s)
-    and is cut again, so the time leaves the grid of 0.01 s by 0.005 s. The event is resolved in
-    steps <= 0.01 s, and 5 calm steps after it (at 0.555 s) the nominal step resumes at once,
-    instead of waiting for a time on its grid that the fine steps can no longer reach."""
+    and is cut again. The cut steps grow back only where the time lies on the grid of the grown
+    step (0.005 s at 0.415 s, 0.01 s at 0.44 s, not at 0.435 s), so that 5 calm steps after
+    the event (at 0.55 s) the nominal step resumes on its grid (0.6 s) and the interval ends
+    with a nominal step."""
     problem = EventfulProblem(t_hard=0.407, max_ok=0.004)
     events = EventSteps(0.01, 0.3, EventfulProblem.position, calm_steps=5)
     rows = run(problem, 1.0, 0.1, events=events, progress=False)
     times, steps = np.array([r["time_s"] for r in rows]), np.array([r["dt_s"] for r in rows])
     assert steps.sum() == pytest.approx(1.0) and times[-1] == pytest.approx(1.0)
     assert steps[(times > 0.3 + 1e-9) & (times < 0.5)].max() <= 0.01 + 1e-12  # event resolved
-    assert steps.min() == pytest.approx(0.0025)  # cut twice within it
-    assert any(abs(t - 0.555) < 1e-9 for t in times)  # off the grid of 0.01 s after the cuts
+    assert np.allclose(np.unique(np.round(steps, 9)), [0.0025, 0.005, 0.01, 0.1])
+    for step in (0.0025, 0.005, 0.01, 0.1):  # each step ends on its own grid
+        ends = times[np.isclose(steps, step)]
+        assert np.allclose(ends / step, np.round(ends / step))
+    grown = times[np.flatnonzero(np.diff(steps) > 0)]  # the ends of the steps before a growth
+    assert np.allclose(grown, [0.415, 0.44, 0.6])
     nominal = np.flatnonzero(np.isclose(steps, 0.1) & (times > 0.5))
-    assert len(nominal) == 4 and times[nominal[0]] == pytest.approx(0.655)
-    assert np.all(np.isclose(steps[nominal[0] : -1], 0.1))  # nominal to the end but the last
+    assert np.allclose(times[nominal], [0.7, 0.8, 0.9, 1.0])
+
+
+def test_failed_nominal_step_is_retaken_in_event_steps():
+    """With events at 0.01 s, a nominal step of 0.1 s whose Newton fails (at 0.15 s, for steps
+    above 0.02 s) is retaken in steps of 0.01 s, not halved to 0.05 and 0.025 s; the nominal
+    step resumes on its grid after 5 calm steps."""
+    problem = EventfulProblem(t_hard=0.15, max_ok=0.02)
+    events = EventSteps(0.01, 0.3, EventfulProblem.position, calm_steps=5)
+    rows = run(problem, 0.3, 0.1, events=events, progress=False)
+    times, steps = np.array([r["time_s"] for r in rows]), np.array([r["dt_s"] for r in rows])
+    assert np.allclose(problem.attempts[:3], [0.1, 0.1, 0.01])  # the second 0.1 s step failed
+    assert np.allclose(steps, [0.1] + [0.01] * 10 + [0.1])
+    assert times[-1] == pytest.approx(0.3)
 
 
 @pytest.mark.parametrize(
