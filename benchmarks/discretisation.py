@@ -14,7 +14,6 @@ Prints a markdown table.
 """
 
 import argparse
-import gc
 import sys
 import time
 
@@ -22,12 +21,11 @@ from common import backend  # noqa: F401
 
 import numpy as np
 from mpi4py import MPI
-from petsc4py import PETSc
 
 from common.case import read_case
 from solver.dynamics.time_loop import run
 from solver.installation.case import InstallationCase
-from solver.installation.model import set_up_joint_model
+from solver.installation.model import free_dropped_joints, set_up_joint_model
 from solver.modal.eigen import EigenOptions, modal_analysis
 from solver.modal.interface import bonded_band
 
@@ -83,8 +81,7 @@ def main(argv=None) -> int:
     for label, overrides in DISCRETISATIONS:
         r = measure(comm, InstallationCase.from_dict(read_case(a.case, a.set + overrides)))
         rows.append((label, r))
-        gc.collect()  # the last model's PETSc objects, before the next (larger) one
-        PETSc.garbage_cleanup(comm)
+        free_dropped_joints()  # the last joint's PETSc objects, before the next (larger) one
         say(
             f"{label}: {r['dofs']} dofs, {r['s_per_step']:.2f} s/step (Newton {r['newton']:.2f}/step), "
             f"frequencies {' '.join(f'{f:.2f}' for f in r['frequencies'])} Hz",

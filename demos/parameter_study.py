@@ -28,6 +28,7 @@ from common import backend  # noqa: F401  (before dolfinx)
 from mpi4py import MPI
 
 from solver.installation import cli
+from solver.installation.model import free_dropped_joints
 from solver.post.csv import write_csv
 from solver.post.plots import plot_parameter_study
 from solver.installation.parameter_study import (
@@ -92,6 +93,8 @@ def main(argv: list[str] | None = None) -> int:
                     f"the second half), settlement {r['settlement_end_mm']:.4f} mm"
                 )
         log(f"  {status} in {time.perf_counter() - wall:.1f} s")
+        del runner
+        free_dropped_joints()  # this variant's joint, before the next one is set up
         write_csv(out / "summary.csv", SUMMARY_COLUMNS, rows, comm)
         plot_parameter_study(rows, out / "summary.png", comm)
     log(f"\nsummary: {out / 'summary.csv'}, {out / 'summary.png'}")

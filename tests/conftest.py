@@ -17,6 +17,8 @@ import pytest  # noqa: E402
 from mpi4py import MPI  # noqa: E402
 from petsc4py import PETSc  # noqa: E402
 
+from solver.installation.model import free_dropped_joints  # noqa: E402
+
 DEMOS = Path(__file__).resolve().parents[1] / "demos"
 
 
@@ -46,10 +48,11 @@ def pytest_collection_modifyitems(config, items):
 @pytest.fixture(autouse=True)
 def collect_garbage():
     """After each test: free the Python objects it left and the PETSc objects whose collective
-    destruction they deferred (the same on every rank)."""
+    destruction they deferred (the same on every rank), those of the joints it set up included."""
     yield
     gc.collect()
     PETSc.garbage_cleanup(MPI.COMM_WORLD)
+    free_dropped_joints()
 
 
 @pytest.fixture(scope="session")

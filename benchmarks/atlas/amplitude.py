@@ -24,7 +24,7 @@ import numpy as np
 from mpi4py import MPI
 
 from benchmarks.atlas.installed import restore_installed
-from benchmarks.atlas.kept import keep_run, kept_run
+from benchmarks.atlas.kept import frees_joints, keep_run, kept_run
 from benchmarks.atlas.stepping import run_schedule
 from common.case import read_case
 from solver.dynamics.loads import Schedule, Stage
@@ -131,6 +131,7 @@ class _Branches:
         return run_schedule(model, schedule, dt)
 
 
+@frees_joints
 def amplitude_runs(
     comm: MPI.Comm,
     case_name: str,

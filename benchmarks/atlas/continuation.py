@@ -14,7 +14,7 @@ from typing import Any
 from mpi4py import MPI
 
 from benchmarks.atlas.installed import installed_state, restore_installed
-from benchmarks.atlas.kept import keep_run, kept_run
+from benchmarks.atlas.kept import frees_joints, keep_run, kept_run
 from benchmarks.atlas.stepping import run_schedule
 from solver.dynamics.loads import Schedule
 from solver.installation.planning import StagePlan
@@ -22,6 +22,7 @@ from solver.installation.planning import StagePlan
 __all__ = ["continued_stage"]
 
 
+@frees_joints
 def continued_stage(
     comm: MPI.Comm,
     case_name: str,

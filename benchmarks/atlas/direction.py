@@ -19,7 +19,7 @@ from typing import Any
 from mpi4py import MPI
 
 from benchmarks.atlas.installed import modal_table, restore_installed
-from benchmarks.atlas.kept import keep_run, kept_run
+from benchmarks.atlas.kept import frees_joints, keep_run, kept_run
 from benchmarks.atlas.stepping import advance, joint_state
 from common.case import read_case
 from solver.dynamics.loads import Schedule, Stage
@@ -61,6 +61,7 @@ def anti_symmetric_mode(run_folder: Path, amplitude_N: float) -> Excitation | No
     )
 
 
+@frees_joints
 def direction_runs(
     comm: MPI.Comm,
     case_name: str,

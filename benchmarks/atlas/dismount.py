@@ -23,7 +23,7 @@ import numpy as np
 from mpi4py import MPI
 
 from benchmarks.atlas.installed import restore_installed
-from benchmarks.atlas.kept import keep_run, kept_run
+from benchmarks.atlas.kept import frees_joints, keep_run, kept_run
 from benchmarks.atlas.stepping import advance, joint_state
 from benchmarks.atlas.settled import settle
 from solver.dynamics.loads import Schedule, Stage, eccentric_amplitude
@@ -64,6 +64,7 @@ def released(rows: list, settled_normal_N: float, slip_rate_mm_s: float) -> bool
     )
 
 
+@frees_joints
 def dismount_runs(
     comm: MPI.Comm,
     case_name: str,

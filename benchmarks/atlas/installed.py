@@ -14,7 +14,7 @@ from typing import Any
 
 from mpi4py import MPI
 
-from benchmarks.atlas.kept import keep_run, kept_run
+from benchmarks.atlas.kept import frees_joints, keep_run, kept_run
 from benchmarks.atlas.self_weight import N_MODES, contact_height
 from benchmarks.atlas.stepping import advance
 from common.case import read_case
@@ -100,6 +100,7 @@ def restore_installed(
     return model, excitations, manifest["natural_frequencies_Hz"]
 
 
+@frees_joints
 def installed_modes(
     comm: MPI.Comm,
     case_name: str,

@@ -15,7 +15,7 @@ from typing import Any
 
 from mpi4py import MPI
 
-from benchmarks.atlas.kept import keep_run, kept_run
+from benchmarks.atlas.kept import frees_joints, keep_run, kept_run
 from benchmarks.atlas.stepping import joint_state, run_schedule
 from benchmarks.atlas.settled import SettledJoint, settle
 from solver.dynamics.loads import Schedule, Stage
@@ -62,6 +62,7 @@ def _harmonic(
     return run_schedule(model, Schedule([stage], start_s=model.problem.t), dt)
 
 
+@frees_joints
 def selectivity_runs(
     comm: MPI.Comm,
     case_name: str,

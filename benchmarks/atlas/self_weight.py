@@ -14,7 +14,7 @@ from typing import Any
 import numpy as np
 from mpi4py import MPI
 
-from benchmarks.atlas.kept import keep_run, kept_run
+from benchmarks.atlas.kept import frees_joints, keep_run, kept_run
 from common.case import read_case
 from solver.contact import Status
 from solver.installation.case import InstallationCase
@@ -37,6 +37,7 @@ def contact_height(model: JointModel) -> float:
     return model.comm.allreduce(float(z[touching].max(initial=0.0)), op=MPI.MAX)
 
 
+@frees_joints
 def self_weight_run(
     comm: MPI.Comm,
     case_name: str,

@@ -26,7 +26,7 @@ from typing import Any
 import numpy as np
 from mpi4py import MPI
 
-from benchmarks.atlas.kept import keep_run, kept_run
+from benchmarks.atlas.kept import frees_joints, keep_run, kept_run
 from benchmarks.atlas.stepping import advance, joint_state, run_schedule
 from benchmarks.atlas.settled import settle
 from common.case import read_case
@@ -82,6 +82,7 @@ def nearest_mode(frequency_hz: float, natural_hz: list[float]) -> tuple[float, f
     return f_n, frequency_hz / f_n - 1.0
 
 
+@frees_joints
 def sweep_runs(
     comm: MPI.Comm,
     case_name: str,
@@ -168,6 +169,7 @@ def sweep_runs(
     return result
 
 
+@frees_joints
 def unexcited_run(
     comm: MPI.Comm, case_name: str, overrides: list[str], folder: Path, sweeps: dict[str, Any]
 ) -> dict[str, Any]:

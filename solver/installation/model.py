@@ -5,7 +5,9 @@ of the settled joint (:func:`settled_modes`) and the vibration forcing
 
 from __future__ import annotations
 
+import gc
 import time
+import weakref
 from collections.abc import Callable, Sequence
 from dataclasses import dataclass, field
 from typing import Any
@@ -117,6 +119,29 @@ def _newton_options(case: InstallationCase, comm: MPI.Comm) -> dict[str, Any]:
     }
 
 
+#: each joint set up (weakly) with the communicator of its PETSc objects: ``free_dropped_joints``
+_JOINTS: list[tuple[weakref.ref, PETSc.Comm]] = []
+
+
+def free_dropped_joints() -> None:
+    """Destroy the PETSc objects of the joints Python has dropped (collective on the ranks that
+    set them up; call it where no joint is in the middle of a step).
+
+    petsc4py hands a parallel PETSc object that Python drops to the garbage of the object's
+    communicator, which only ``PETSc.garbage_cleanup`` on that communicator empties. A joint's
+    objects live on its mesh's own duplicate of the communicator it was set up on, which a
+    clean-up on that communicator does not reach: a process that sets up joint after joint
+    (the atlas, the parameter study, the test suite) would keep every joint's matrices and
+    factorisations to its end."""
+    gc.collect()
+    alive = []
+    for joint, objects_comm in _JOINTS:
+        PETSc.garbage_cleanup(objects_comm)
+        if joint() is not None:
+            alive.append((joint, objects_comm))
+    _JOINTS[:] = alive
+
+
 def set_up_joint_model(comm: MPI.Comm, case: InstallationCase) -> JointModel:
     """Set up the joint of ``case`` at rest in its first-contact position (collective)."""
     t0 = time.perf_counter()
@@ -169,7 +194,7 @@ def set_up_joint_model(comm: MPI.Comm, case: InstallationCase) -> JointModel:
     )
     problem.initialise(0.0)
     settlement = Settlement(problem.u, placed, mesh_data.cell_tags)
-    return JointModel(
+    model = JointModel(
         case,
         mesh_data,
         V,
@@ -183,6 +208,9 @@ def set_up_joint_model(comm: MPI.Comm, case: InstallationCase) -> JointModel:
         placed,
         {"set-up": time.perf_counter() - t0},
     )
+    if comm.size > 1:  # serial PETSc objects are destroyed as Python drops them
+        _JOINTS.append((weakref.ref(model), M.getComm()))
+    return model
 
 
 def settled_modes(model: JointModel, n_modes: int) -> tuple[ModalResult, ContactInterface]:
