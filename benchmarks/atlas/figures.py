@@ -39,7 +39,7 @@ def plot_settlement(runs: dict[str, dict], path: Path, title: str) -> None:
     ax.set_xlabel("time [s]")
     ax.set_ylabel("settlement [mm]")
     ax.set_title(title)
-    ax.legend(loc="upper left")
+    ax.legend(loc="lower right")
     r = next(iter(runs.values()))
     t = np.linspace(0.0, max(r["time_s"]), 200)
     ax2 = ax.twinx()
