@@ -7,7 +7,6 @@ import numpy as np
 from mpi4py import MPI
 
 from common.case import read_case
-from solver.dynamics.time_loop import run
 from solver.installation.case import InstallationCase
 from solver.installation.frequencies import Excitation, choose_frequencies
 from solver.installation.model import JointModel, set_up_joint_model, settled_modes
@@ -28,11 +27,11 @@ class SettledJoint:
 
 def settle(comm: MPI.Comm, overrides: list[str], case_name: str) -> SettledJoint:
     """Build the joint of the case (a preset name or a TOML file) with ``overrides``, run its
-    self-weight stage and choose the frequencies as the installation run does (collective)."""
+    self-weight stage as the installation run does (its step, event steps and cut steps) and
+    choose the frequencies as it does (collective)."""
     case = InstallationCase.from_dict(read_case(case_name, overrides))
     model = set_up_joint_model(comm, case)
-    sw = case.self_weight
-    run(model.problem, sw.duration_s, sw.dt_s, progress=False)
+    model.run_self_weight()
     return choose(model)
 
 

@@ -17,8 +17,11 @@ from benchmarks.atlas.dismount import dismount_runs, lift_rate, released
 from benchmarks.atlas.outcome import Outcome, Row
 from benchmarks.atlas.page import write_page
 from benchmarks.atlas.selectivity import selectivity_ratio
+from benchmarks.atlas.settled import settle
+from benchmarks.atlas.stepping import joint_state
 from benchmarks.scenarios import main
 from solver.dynamics.loads import eccentric_amplitude
+from solver.installation.runner import Installation
 
 pytestmark = pytest.mark.mpi
 
@@ -74,6 +77,23 @@ def test_atlas_runs_scenarios_and_rebuilds_its_page(atlas_output):
         ]
         write_page(out / "no_runs", page)
         assert page.read_text() == text
+
+
+def test_the_settled_joint_is_the_installation_runs_self_weight_stage(
+    installed, tiny_case, shared_dir
+):
+    """The state S5, S6 and S7 branch from is the installation run's after its self-weight
+    stage, event steps included; with them it differs from the uniform steps' state."""
+    events = ["self_weight.event_dt_s=0.001"]  # the sliding TP: every step an event step
+    out = shared_dir("events")
+    Installation(MPI.COMM_WORLD, tiny_case(*events), out, progress=False).run()
+    stage = json.loads((out / "checkpoint" / "manifest.json").read_text())["stages"][0]
+    manifest = json.loads((installed / "checkpoint" / "manifest.json").read_text())
+    uniform = manifest["stages"][0]
+    t, settlement_mm, _ = joint_state(settle(MPI.COMM_WORLD, events, "tiny").model)
+    assert t == pytest.approx(stage["end_s"], rel=1e-12)
+    assert settlement_mm == pytest.approx(stage["settlement_end_mm"], rel=1e-9)
+    assert abs(settlement_mm / uniform["settlement_end_mm"] - 1) > 1e-6
 
 
 def test_s2_s4_s5_s8_from_the_installed_state(installed, atlas_output, tiny_case):
