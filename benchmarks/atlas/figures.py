@@ -184,6 +184,8 @@ def plot_sequence(
         label = "natural frequency (settled)" if k == 0 else None
         ax_f.axvline(fn, color="tab:blue", ls=":", lw=0.8, label=label)
     ax_f.set_yscale("log")
+    low, high = ax_f.get_ylim()
+    ax_f.set_ylim(low, 10 * high)  # room above the bars for their labels and the legend
     ax_f.set_xlabel("excitation frequency [Hz]")
     ax_f.set_ylabel("settlement gained in the stage [um]")
     if marked:
