@@ -18,13 +18,16 @@ written by
 
     mpirun -n 2 python benchmarks/scenarios.py --all          # or a list: S1 S8
     mpirun -n 2 python benchmarks/scenarios.py --all --installed output/install
+    mpirun -n 2 python benchmarks/scenarios.py S2 S4 --case scaled_full --installed output/full
 
 which runs the scenarios on the default case (`--case` and `--set` choose another; the joint of each
 row below names the case and the overrides it ran with), keeps each one's outputs in
 `output/atlas/<scenario>/` (runs that scenarios share, in `output/atlas/runs/`, are made once) and
 rebuilds this page from all the scenarios found there; the other scenarios' rows are their last
 outcomes written to this page, kept in `docs/scenarios/<scenario>.json`. With `--installed RUN` (the
-output folder of a `demos/install.py` run of the same case on as many ranks), S2 and S4 read that
+output folder of a `demos/install.py` run of the same case on as many ranks, e.g. `mpirun -n 2
+python demos/install.py --full --set output.stage_states=true --output output/full` for
+`scaled_full`), S2 and S4 read that
 run's stages (those up to its last checkpoint: all of them once it has finished), and S3, S4, S5 and
 S8 also start from the installed state: the run's last checkpoint, after its last completed stage;
 S8 also after each vibration stage whose state the run kept (`--set output.stage_states=true`), as
