@@ -24,8 +24,8 @@ from mpi4py import MPI
 
 from benchmarks.atlas.installed import restore_installed
 from benchmarks.atlas.kept import frees_joints, keep_run, kept_run
-from benchmarks.atlas.stepping import advance, joint_state
 from benchmarks.atlas.settled import settle
+from benchmarks.atlas.stepping import advance, joint_state
 from solver.dynamics.loads import Schedule, Stage, eccentric_amplitude
 from solver.installation import checkpoint
 from solver.installation.dismount import pull_out_force

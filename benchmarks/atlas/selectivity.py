@@ -16,8 +16,8 @@ from typing import Any
 from mpi4py import MPI
 
 from benchmarks.atlas.kept import frees_joints, keep_run, kept_run
-from benchmarks.atlas.stepping import joint_state, run_schedule
 from benchmarks.atlas.settled import SettledJoint, settle
+from benchmarks.atlas.stepping import joint_state, run_schedule
 from solver.dynamics.loads import Schedule, Stage
 from solver.installation import checkpoint
 from solver.installation.model import JointModel

@@ -27,8 +27,8 @@ import numpy as np
 from mpi4py import MPI
 
 from benchmarks.atlas.kept import frees_joints, keep_run, kept_run
-from benchmarks.atlas.stepping import advance, joint_state, run_schedule
 from benchmarks.atlas.settled import settle
+from benchmarks.atlas.stepping import advance, joint_state, run_schedule
 from common.case import read_case
 from solver.dynamics.fidelity import discrete_frequency
 from solver.dynamics.loads import Schedule, Stage, frequency_ramp, frequency_steps

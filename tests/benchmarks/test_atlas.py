@@ -12,7 +12,8 @@ import shutil
 import pytest
 from mpi4py import MPI
 
-from benchmarks.atlas.catalogue import SCENARIOS, _motors_rows, _release_word
+from benchmarks.atlas.catalogue import SCENARIOS
+from benchmarks.atlas.criteria.s5_dismount import motors_rows, release_word
 from benchmarks.atlas.dismount import dismount_runs, lift_rate, released
 from benchmarks.atlas.outcome import Outcome, Row
 from benchmarks.atlas.page import write_page
@@ -197,7 +198,7 @@ def test_dismount_at_the_motors_force(tiny_case, shared_dir):
     assert b["control"]["frequency_Hz"] != b["modal"]["frequency_Hz"]
     for branch in (b["modal"], b["control"]):  # from the pulled state
         assert branch["rows"][0][0] == pytest.approx(r["settled"]["time_s"] + 2 * stage_s)
-    row = _motors_rows(r, r, "settled", tiny_case().output.slip_rate_mm_s)[1]
+    row = motors_rows(r, r, "settled", tiny_case().output.slip_rate_mm_s)[1]
     assert f"0.3632 f^2 = {motors / 1e3:.2f} kN" in row.criterion
     lift = b["modal"]["rows"][0][1] - b["modal"]["rows"][-1][1]
     assert f"the TP {lift:+.3f} mm up" in row.measured
@@ -215,18 +216,18 @@ def test_release_of_a_dismount_branch():
     lifting_above = rows([0.2, 0.1, -0.05, -0.2, -0.4])
     assert lift_rate(lifting_above) == pytest.approx(17.5)  # (0.35 mm) / (0.02 s)
     assert released(lifting_above, settled_N, threshold)
-    assert _release_word({"rows": lifting_above}, settled_N, threshold).startswith("released")
+    assert release_word({"rows": lifting_above}, settled_N, threshold).startswith("released")
     lifting_below = rows([0.9, 0.8, 0.6, 0.4, 0.2])
     assert not released(lifting_below, settled_N, threshold)
-    word = _release_word({"rows": lifting_below}, settled_N, threshold)
+    word = release_word({"rows": lifting_below}, settled_N, threshold)
     assert word == "holds, lifting, 0.200 mm below its first-contact position at the end"
     resting_above = rows([-0.1] * 5)
     assert not released(resting_above, settled_N, threshold)
-    word = _release_word({"rows": resting_above}, settled_N, threshold)
+    word = release_word({"rows": resting_above}, settled_N, threshold)
     assert word == "holds, 0.100 mm above its first-contact position at the end"
     apart = rows([-0.1] * 5, normal_N=0.0)
     assert released(apart, settled_N, threshold)
-    assert _release_word({"rows": apart}, settled_N, threshold) == "separated"
+    assert release_word({"rows": apart}, settled_N, threshold) == "separated"
     assert not released(rows([0.1] * 5, normal_N=0.0), settled_N, threshold)
 
 
