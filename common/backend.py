@@ -12,8 +12,8 @@ Reproducibility: by default PETSc computes the Gram-Schmidt products of GMRES
 (``VecMDot``/``VecMAXPY`` over the contiguous block of Krylov vectors) with BLAS gemv,
 and OpenBLAS's gemv kernels sum in an order that depends on the memory alignment of
 that block, which differs from one solver object to the next. Two runs of the same
-input then differed at round-off (1e-18 m in a Newton correction), which stick-slip
-amplified to 5e-8 relative in the settlement, beyond the 1e-8 a resumed run must meet.
+input then differ at round-off (1e-18 m in a Newton correction), which stick-slip
+amplifies to 5e-8 relative in the settlement, beyond the 1e-8 a resumed run must meet.
 PETSc's plain loops are deterministic; they are used unless the user's PETSc options
 say otherwise (docs/contact.md, section 6).
 
@@ -35,7 +35,7 @@ for _name in ("vec_mdot_use_gemv", "vec_maxpy_use_gemv"):
 
 # BLAS threads: one per rank. OpenBLAS (PETSc's, in the factorisations, and NumPy's and SciPy's,
 # in the dense contact problems) starts one thread per core in every rank by default: the ranks
-# of an MPI run then oversubscribe the cores (a 2-rank run on 2 cores ran severalfold slower),
+# of an MPI run then oversubscribe the cores (a 2-rank run on 2 cores runs severalfold slower),
 # and the dense contact problems (matrices of a few hundred to a few thousand rows) run slower on
 # two threads than on one even in a serial run. The limit applies to the libraries loaded when it
 # is set: SciPy's own OpenBLAS is loaded first.

@@ -55,12 +55,14 @@ def clip_to_facet(s: npt.NDArray, facet_cell: basix.CellType) -> npt.NDArray:
     return s
 
 
-def _box_data(element: basix.finite_element.FiniteElement):
-    """(element, vertex dofs, (bi)linear vertex interpolation at the nodes (nodes, vertices),
+def _box_data(
+    element: basix.finite_element.FiniteElement,
+) -> tuple[npt.NDArray, npt.NDArray, float]:
+    """(vertex dofs, (bi)linear vertex interpolation at the nodes (nodes, vertices),
     Lebesgue constant max_s sum_j |N_j(s)| sampled on a fine grid with a 5 % margin)."""
     vertices = np.array([dofs[0] for dofs in element.entity_dofs[0]])
     linear = basix.create_element(basix.ElementFamily.P, element.cell_type, 1)
-    interpolation = linear.tabulate(0, element.points)[0, :, :, 0]
+    interpolation = np.asarray(linear.tabulate(0, element.points))[0, :, :, 0]
     t = np.linspace(0.0, 1.0, 101)
     s = np.array(
         [
@@ -70,8 +72,9 @@ def _box_data(element: basix.finite_element.FiniteElement):
             if element.cell_type == basix.CellType.quadrilateral or a + b <= 1
         ]
     )
-    lebesgue = 1.05 * float(np.abs(element.tabulate(0, s)[0, :, :, 0]).sum(axis=1).max())
-    return element, vertices, interpolation, lebesgue
+    tabulated = np.asarray(element.tabulate(0, s))[0, :, :, 0]
+    lebesgue = 1.05 * float(np.abs(tabulated).sum(axis=1).max())
+    return vertices, interpolation, lebesgue
 
 
 class _CellElements:
@@ -306,7 +309,14 @@ class MasterSurface:
         excess = np.maximum(np.maximum(local - hi_X - hi_d, lo_X + lo_d - local), 0.0)
         return (1 - 1e-9) * np.linalg.norm(excess, axis=1)
 
-    def _box(self, nodal: npt.NDArray, facet: npt.NDArray, element, vertices, linear, lebesgue):
+    def _box(
+        self,
+        nodal: npt.NDArray,
+        facet: npt.NDArray,
+        vertices: npt.NDArray,
+        linear: npt.NDArray,
+        lebesgue: float,
+    ) -> tuple[npt.NDArray, npt.NDArray]:
         """Upper and lower bounds (n, 3) of the facets' nodal fields ``nodal`` (nF, nodes, 3) along
         the rows of their frames (``distance_bound``)."""
         local = self.frames[facet] @ nodal[facet].transpose(0, 2, 1)  # (n, 3, nodes)

@@ -217,14 +217,14 @@ class ContactCompliance:
         R_bs[:nb_old, :m_old], Z_bb[:nb_old, :nb_old] = self.R_bs, self.Z_bb
         new_points, new_band = slice(m_old, m), slice(nb_old, nb)
         # A^-1 F_N^T W: the new points' columns of Q_ss and R_bs
-        EX, _, Xb = self._solve(m_new, F_new, transpose=True)
+        EX, _, Xb = self._solve(m_new, F_new)
         Q_ss[:, new_points], R_bs[:, new_points] = EX, Xb
         if m_old:  # A^-1 E_N^T: the new points' rows of Q_ss and Q_sb (A symmetric)
-            _, FX, Xb = self._solve(m_new, E_new, transpose=True)
+            _, FX, Xb = self._solve(m_new, E_new)
             Q_ss[new_points, :m_old] = FX[:m_old].T
             Q_sb[new_points, :nb_old] = Xb[:nb_old].T
         if nb > nb_old:  # A^-1 I_bN: the new band's columns of Q_sb and Z_bb, rows of R_bs
-            EX, FX, Xb = self._solve(nb - nb_old, None, transpose=False, unit=nb_old)
+            EX, FX, Xb = self._solve(nb - nb_old, None, unit=nb_old)
             Q_sb[:, new_band], Z_bb[:, new_band] = EX, Xb
             Z_bb[new_band, :nb_old] = Xb[:nb_old].T
             R_bs[new_band, :m_old] = FX[:m_old].T
@@ -268,9 +268,11 @@ class ContactCompliance:
         mat.assemble()
         return mat
 
-    def _solve(self, n: int, B: PETSc.Mat | None, transpose: bool, unit: int = 0):
-        """For the n solutions X = A^-1 C of the columns of B^T (``transpose``) or of the unit
-        vectors of band dofs unit, unit + 1, ...: (E X, F W X) in the blocks' row order and X on
+    def _solve(
+        self, n: int, B: PETSc.Mat | None, unit: int = 0
+    ) -> tuple[npt.NDArray, npt.NDArray, npt.NDArray]:
+        """For the n solutions X = A^-1 C of the columns of B^T (B given) or of the unit
+        vectors of band dofs unit, unit + 1, ... (B None): (E X, F W X) in the blocks' row order and X on
         the band, in band order."""
         if B is not None:
             BT = B.transpose(PETSc.Mat())

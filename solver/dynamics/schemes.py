@@ -74,7 +74,9 @@ class GeneralisedAlpha:
         c_M = (1 - self.alpha_m) / ((1 - self.alpha_f) * self.beta * dt**2)
         return c_M, self.gamma / (self.beta * dt)
 
-    def history(self, u: np.ndarray, v: np.ndarray, a: np.ndarray, dt: float):
+    def history(
+        self, u: np.ndarray, v: np.ndarray, a: np.ndarray, dt: float
+    ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
         """Known parts (a_hat, v_hat, u_hat) of a_{n+1-alpha_m}, v_{n+1-alpha_f}, u_{n+1-alpha_f}.
 
         a_{n+1-alpha_m} = (1-alpha_f) c_M u_{n+1} + a_hat, v_{n+1-alpha_f} = (1-alpha_f) c_C u_{n+1}
@@ -86,7 +88,9 @@ class GeneralisedAlpha:
         v_pred = v + dt * (1 - g) * a + g * dt * a_pred  # v_{n+1} minus its u_{n+1} part
         return (1 - am) * a_pred + am * a, (1 - af) * v_pred + af * v, af * u
 
-    def update(self, u_new: np.ndarray, u: np.ndarray, v: np.ndarray, a: np.ndarray, dt: float):
+    def update(
+        self, u_new: np.ndarray, u: np.ndarray, v: np.ndarray, a: np.ndarray, dt: float
+    ) -> tuple[np.ndarray, np.ndarray]:
         """Newmark update: (v_{n+1}, a_{n+1}) from u_{n+1} and the state at step n."""
         a_new = (u_new - u - dt * v) / (self.beta * dt**2) - (0.5 / self.beta - 1) * a
         v_new = v + dt * ((1 - self.gamma) * a + self.gamma * a_new)
@@ -108,17 +112,16 @@ class QuasiStatic:
             raise ValueError(f"time step must be positive, got {dt} s")
         return 0.0, 0.0
 
-    def history(self, u: np.ndarray, v: np.ndarray, a: np.ndarray, dt: float):
+    def history(
+        self, u: np.ndarray, v: np.ndarray, a: np.ndarray, dt: float
+    ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
         zero = np.zeros_like(u)
         return zero, zero, zero
 
-    def update(self, u_new: np.ndarray, u: np.ndarray, v: np.ndarray, a: np.ndarray, dt: float):
+    def update(
+        self, u_new: np.ndarray, u: np.ndarray, v: np.ndarray, a: np.ndarray, dt: float
+    ) -> tuple[np.ndarray, np.ndarray]:
         return (u_new - u) / dt, np.zeros_like(a)
-
-
-def newmark_update(u_new, u, v, a, dt: float, beta: float = 0.25, gamma: float = 0.5):
-    """Newmark update of velocity and acceleration, (v_{n+1}, a_{n+1}), from u_{n+1}."""
-    return GeneralisedAlpha(beta=beta, gamma=gamma).update(u_new, u, v, a, dt)
 
 
 Scheme = GeneralisedAlpha | QuasiStatic

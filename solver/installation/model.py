@@ -14,6 +14,7 @@ from typing import Any
 
 import numpy as np
 from dolfinx import fem
+from dolfinx.mesh import MeshTags
 from mpi4py import MPI
 from petsc4py import PETSc
 
@@ -142,6 +143,26 @@ def free_dropped_joints() -> None:
     _JOINTS[:] = alive
 
 
+def joint_contact(
+    V: fem.FunctionSpace, facet_tags: MeshTags | None, case: InstallationCase, theta: int
+) -> NitscheContact:
+    """The Nitsche frictional contact of ``case`` between its slave and master surfaces, with the
+    Nitsche variant ``theta`` (1 symmetric, 0 skew-free, -1 skew-symmetric)."""
+    c = case.contact
+    return NitscheContact(
+        V,
+        facet_tags,
+        tags.BY_NAME[c.slave],
+        tags.BY_NAME[c.master],
+        case.material,
+        case.friction,
+        gamma0=c.gamma0,
+        theta=theta,
+        quadrature_degree=c.quadrature_degree or None,
+        lagged_friction=c.lagged_friction,
+    )
+
+
 def set_up_joint_model(comm: MPI.Comm, case: InstallationCase) -> JointModel:
     """Set up the joint of ``case`` at rest in its first-contact position (collective)."""
     t0 = time.perf_counter()
@@ -151,18 +172,7 @@ def set_up_joint_model(comm: MPI.Comm, case: InstallationCase) -> JointModel:
     V = fem.functionspace(mesh_data.mesh, ("Lagrange", case.contact.degree, (3,)))
     bcs = [clamp(V, mesh_data.facet_tags, [tags.MP_CLAMPED])]
     M, K = assemble_structure(V, case.material, bcs)
-    contact = NitscheContact(
-        V,
-        mesh_data.facet_tags,
-        tags.BY_NAME[case.contact.slave],
-        tags.BY_NAME[case.contact.master],
-        case.material,
-        case.friction,
-        gamma0=case.contact.gamma0,
-        theta=case.contact.theta,
-        quadrature_degree=case.contact.quadrature_degree or None,
-        lagged_friction=case.contact.lagged_friction,
-    )
+    contact = joint_contact(V, mesh_data.facet_tags, case, case.contact.theta)
     d = case.damping
     if d.model == "rayleigh":
         damping = RayleighDamping.at_frequency(d.zeta, d.frequency_hz)
@@ -222,19 +232,9 @@ def settled_modes(model: JointModel, n_modes: int) -> tuple[ModalResult, Contact
     on the thin contact band: spurious modes near 0 Hz.) The interface tangent is the
     symmetric Nitsche one (theta = 1) at the same pairing, as the eigenproblem needs.
     """
-    contact, c = model.contact, model.case.contact
+    contact = model.contact
     if contact.theta != 1:
-        contact = NitscheContact(
-            model.V,
-            model.mesh_data.facet_tags,
-            tags.BY_NAME[c.slave],
-            tags.BY_NAME[c.master],
-            model.case.material,
-            model.case.friction,
-            gamma0=c.gamma0,
-            theta=1,
-            quadrature_degree=c.quadrature_degree or None,
-        )
+        contact = joint_contact(model.V, model.mesh_data.facet_tags, model.case, theta=1)
         contact.update(model.problem.u)
     status = np.where(model.contact.state.status == Status.OPEN, Status.OPEN, Status.STICK)
     interface = ContactInterface(contact, status)

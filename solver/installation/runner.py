@@ -227,14 +227,17 @@ class Installation:
         self.log(report.format_stage(summary))
 
     def _write_state(self, name: str) -> None:
+        """ParaView files and the contact-status plot of the state after stage ``name``."""
+        model, k = self.model, len(self.stages)
+        assert model is not None  # set up by run()
         if self.case.output.paraview:
-            paraview.write_state(self.model, self.output, name, len(self.stages))
+            paraview.write_state(model.problem.u, model.problem.t, model.contact, self.output, k)
         if self.case.output.plots:
             plots.plot_contact_status(
-                self.model.contact,
-                self.model.placed,
-                self.output / f"contact_status_{len(self.stages)}.png",
-                f"after {name}, t = {self.model.problem.t:.4g} s",
+                model.contact,
+                model.placed,
+                self.output / f"contact_status_{k}.png",
+                f"after {name}, t = {model.problem.t:.4g} s",
             )
 
     def _schedule(self, start_s: float) -> Schedule:

@@ -30,12 +30,13 @@ def write_functions(
     return path
 
 
-def write_state(model, folder: Path, name: str, k: int) -> None:
-    """Displacement (VTX, time = simulated time) and contact points (.vtp) after stage k."""
-    u = model.problem.u
-    with io.VTXWriter(model.comm, folder / f"displacement_{k}.bp", [u], engine="BP4") as writer:
-        writer.write(model.problem.t)
-    write_contact_points(model.contact, folder / f"contact_{k}.vtp")
+def write_state(u: fem.Function, t: float, contact: NitscheContact, folder: Path, k: int) -> None:
+    """The displacement ``u`` [m] (VTX, "time" = the simulated time ``t`` [s]) and the contact
+    points (.vtp) after stage k (collective)."""
+    comm = u.function_space.mesh.comm
+    with io.VTXWriter(comm, folder / f"displacement_{k}.bp", [u], engine="BP4") as writer:
+        writer.write(t)
+    write_contact_points(contact, folder / f"contact_{k}.vtp")
 
 
 def write_contact_points(contact: NitscheContact, path) -> None:

@@ -329,7 +329,7 @@ class _Dynamics:
         f0 = -Z.T @ (self.k * z0)
         return Z, z0, Mr, Cr, Kr, f0
 
-    def _affine_in_state(self, fun, Z, z0, t):
+    def _affine_in_state(self, fun, Z, z0):
         """Coefficients (c_r, c_rd, c_F, const) of a function linear in (q, qdot, F(t))."""
         base = np.zeros(8)
         base[0:4] = z0
@@ -384,7 +384,7 @@ class _Dynamics:
             return float(self.a @ state[0:4])
 
         for fun in (margin(-1.0), margin(1.0), gap):
-            cr, crd, cF, c0 = self._affine_in_state(fun, Z, z0, t)
+            cr, crd, cF, c0 = self._affine_in_state(fun, Z, z0)
             mean = c0 + cr @ r_static + cF * load.static
             amp = abs(cr @ R + crd @ (1j * omega * R) + cF * load.amplitude)
             bound = math.sqrt(

@@ -94,7 +94,8 @@ def test_rigid_body_modes_are_not_excited():
         records, VibrationSettings(n_frequencies=1, lead_in_hz=(), max_frequency_hz=300.0)
     )
     assert [e.frequency_Hz for e in chosen if e.role == "modal"] == [140.0]
-    assert resonant_slip(0.1, 1e-3, 0.0, 3600.0, 0.01) == np.inf  # (was a ZeroDivisionError)
+    # an undamped mode: infinite resonant slip, no division by zero
+    assert resonant_slip(0.1, 1e-3, 0.0, 3600.0, 0.01) == np.inf
 
 
 def test_m2n1_mode_is_added_above_the_limit():

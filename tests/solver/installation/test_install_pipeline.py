@@ -156,8 +156,8 @@ def test_frictional_resume_repeats_the_uninterrupted_run(coarse_case, shared_dir
     """Killed after the landing (second checkpoint, t = 0.08 s, the TP sliding on the MP) and
     resumed: the same displacement and settlement history as without the kill (1e-8), although
     stick-slip amplifies any round-off difference. Up to the kill the killed run is the same
-    input computed a second time and must repeat the arithmetic (1e-13): with PETSc's BLAS-gemv
-    Gram-Schmidt in GMRES two such runs differed by 4e-10 in the first step (common/backend.py)."""
+    input computed a second time and must repeat the arithmetic (1e-13), which PETSc's BLAS-gemv
+    Gram-Schmidt in GMRES does not (common/backend.py)."""
     case = coarse_case(*FRICTIONAL)
     comm = MPI.COMM_WORLD
     full = Installation(comm, case, shared_dir("friction_full"), progress=False)
