@@ -191,6 +191,14 @@ class Elastodynamics:
     def _condensation(self) -> BulkCondensation | None:
         return self._operator.condensation
 
+    def condensation_at(self, dt: float) -> BulkCondensation:
+        """The condensed bulk of the effective operator A(dt) at the step ``dt`` [s], assembled
+        if it is not current (collective); ValueError for a problem without a condensed bulk."""
+        self._assemble_operator(dt)
+        if self._condensation is None:
+            raise ValueError("the problem has no condensed bulk (contact.condense_bulk = false)")
+        return self._condensation
+
     def _assemble_operator(self, dt: float) -> None:
         """Make A(dt) = K + c_M M + c_C (a M + b K) current: a kept one, else new values in the
         least recently used (factorised lazily by the KSP and the contact solver)."""

@@ -169,8 +169,7 @@ def test_compliance_against_dense_product(tiny_case):
     comm = MPI.COMM_WORLD
     model = set_up_joint_model(comm, tiny_case())
     problem, contact = model.problem, model.contact
-    problem._assemble_operator(1e-4)  # the condensed operator at a step of 0.1 ms
-    condensation = problem._condensation
+    condensation = problem.condensation_at(1e-4)  # the condensed operator at a step of 0.1 ms
     zone = condensation.zone
     A_prime = condensation.A_hat.copy()
     A_prime.axpy(
