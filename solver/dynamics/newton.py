@@ -40,7 +40,7 @@ from solver.dynamics.factor_store import Factors, FactorStore
 from solver.dynamics.linear_algebra import BlockLU, SumOperator, forcing_term
 from solver.dynamics.residual import contact_residual, dirichlet_rows
 
-__all__ = ["ContactNewtonSolver", "NewtonResult", "solve_contact_problem"]
+__all__ = ["ContactNewtonSolver", "NewtonResult", "newton_stop", "solve_contact_problem"]
 
 
 @dataclass
@@ -67,6 +67,30 @@ class NewtonResult:
     factorizations: int = 0
     message: str = ""
     timings: dict[str, float] = field(default_factory=dict)  #: wall time per phase [s]
+
+
+def newton_stop(
+    norms: list[float],
+    tol: float,
+    max_iterations: int,
+    linear: list[int] | None = None,
+    step_small: bool = False,
+) -> NewtonResult | None:
+    """Where a Newton loop at the residual norms ``norms`` [N] (the last one its iterate's) stops:
+    not converged if the last is not finite or the iterations are used up, converged at or below
+    ``tol`` [N] (or when the correction was negligible, ``step_small``); None to go on."""
+    k, norm = len(norms) - 1, norms[-1]
+    linear = [] if linear is None else linear
+    if not np.isfinite(norm):
+        return NewtonResult(
+            False, k, norms, linear, message=f"residual is not finite at iteration {k}"
+        )
+    if norm <= tol or step_small:
+        return NewtonResult(True, k, norms, linear)
+    if k == max_iterations:
+        message = f"no convergence in {k} Newton iterations (||F|| = {norm:.3e} N)"
+        return NewtonResult(False, k, norms, linear, message=message)
+    return None
 
 
 class ContactNewtonSolver:
@@ -388,23 +412,9 @@ class ContactNewtonSolver:
         norm = self._residual(step.linear, contact, u, F, timings, update=not contact.updated_at(u))
         for k in range(self.max_iterations + 1):
             norms.append(norm)
-            if not np.isfinite(norm):
-                result = NewtonResult(
-                    False, k, norms, linear, message=f"residual is not finite at iteration {k}"
-                )
-                break
             tol = max(self.atol, self.rtol * max(norms[0], b_norm), contact.residual_floor())
-            if norm <= tol or step_small:
-                result = NewtonResult(True, k, norms, linear)
-                break
-            if k == self.max_iterations:
-                result = NewtonResult(
-                    False,
-                    k,
-                    norms,
-                    linear,
-                    message=f"no convergence in {k} Newton iterations (||F|| = {norm:.3e} N)",
-                )
+            result = newton_stop(norms, tol, self.max_iterations, linear, step_small)
+            if result is not None:
                 break
             best = int(np.argmin(norms))
             if self.stall_iterations and k - best >= self.stall_iterations:

@@ -42,7 +42,7 @@ import dolfinx
 from solver.contact.model import ContactModel, Status
 from solver.contact.nitsche import NitscheContact
 from solver.dynamics.compliance import ContactCompliance
-from solver.dynamics.newton import NewtonResult
+from solver.dynamics.newton import NewtonResult, newton_stop
 from solver.dynamics.relaxation import CoefficientRelaxation
 from solver.dynamics.residual import contact_residual, dirichlet_rows
 from solver.dynamics.traction_jacobian import TractionJacobian
@@ -337,22 +337,9 @@ class PointNewtonSolver:
         built = False
         for k in range(self.max_iterations + 1):
             norms.append(norm)
-            if not np.isfinite(norm):
-                result = NewtonResult(
-                    False, k, norms, message=f"residual is not finite at iteration {k}"
-                )
-                break
             tol = max(self.atol, self.rtol * max(norms[0], b_norm), contact.residual_floor())
-            if norm <= tol:
-                result = NewtonResult(True, k, norms)
-                break
-            if k == self.max_iterations:
-                result = NewtonResult(
-                    False,
-                    k,
-                    norms,
-                    message=f"no convergence in {k} iterations (||F|| = {norm:.3e} N)",
-                )
+            result = newton_stop(norms, tol, self.max_iterations)
+            if result is not None:
                 break
             t0 = time.perf_counter()
             self._update_points(contact, first=k == 0)
