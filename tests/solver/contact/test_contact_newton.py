@@ -79,12 +79,14 @@ def _direction(contact, u, slave_only: bool):
     return w
 
 
-def test_jacobian_is_consistent_for_slave_motion(sliding_state):
-    contact, u, _ = sliding_state
+def _block_on_flat_base(
+    contact, u: dolfinx.fem.Function
+) -> tuple[dolfinx.fem.Function, np.ndarray]:
+    """The sliding state with the block's displacement kept and the base reset to its undeformed
+    (flat) shape, now and at the step's start (the block then 0.2 mm further back), with the
+    contact updated there. Returns that state and the mask of the block's nodes."""
     V = u.function_space
     mesh = V.mesh
-    # keep the block's displacement, reset the base to its undeformed (flat) shape, now and
-    # at the step's start (the block then was 0.2 mm further back)
     cells = np.arange(
         mesh.topology.index_map(3).size_local + mesh.topology.index_map(3).num_ghosts,
         dtype=np.int32,
@@ -98,6 +100,13 @@ def test_jacobian_is_consistent_for_slave_motion(sliding_state):
     reference.x.array.reshape(-1, 3)[on_block, 0] -= 2e-4
     contact.set_reference(reference, 1.0)
     contact.update(state)
+    return state, on_block
+
+
+def test_jacobian_is_consistent_for_slave_motion(sliding_state):
+    contact, u, _ = sliding_state
+    V = u.function_space
+    state, on_block = _block_on_flat_base(contact, u)
     status = np.concatenate(MPI.COMM_WORLD.allgather(contact.state.status))
     assert np.any(status == Status.SLIP)
     w = _direction(contact, u, slave_only=True)
@@ -289,22 +298,8 @@ def test_reversal_limit_stops_where_the_friction_would_reverse(sliding_state):
     and the step limit is the smallest such fraction over the points that slip the other way at
     the full step."""
     contact, u, _ = sliding_state
-    V = u.function_space
-    mesh = V.mesh
-    comm = mesh.comm
-    cells = np.arange(
-        mesh.topology.index_map(3).size_local + mesh.topology.index_map(3).num_ghosts,
-        dtype=np.int32,
-    )
-    block = cells[dolfinx.mesh.compute_midpoints(mesh, 3, cells)[:, 2] > 0]
-    on_block = np.zeros(u.x.array.size // 3, dtype=bool)
-    on_block[V.dofmap.list[block].ravel()] = True
-    state = u.copy()
-    state.x.array.reshape(-1, 3)[~on_block] = 0.0  # flat base
-    reference = state.copy()
-    reference.x.array.reshape(-1, 3)[on_block, 0] -= 2e-4
-    contact.set_reference(reference, 1.0)
-    contact.update(state)
+    comm = u.function_space.mesh.comm
+    state, on_block = _block_on_flat_base(contact, u)
     slipping, P_t0 = contact.slip_directions()
     assert comm.allreduce(int(slipping.sum()), op=MPI.SUM) > 0
     d = 3e-4  # [m]: back beyond the step's start (the last step slid 2e-4 m), against the friction
