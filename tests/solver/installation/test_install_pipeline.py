@@ -17,6 +17,7 @@ import pytest
 from mpi4py import MPI
 
 from solver.installation import checkpoint
+from solver.installation.case import InstallationCase
 from solver.installation.runner import Installation
 
 pytestmark = pytest.mark.mpi
@@ -87,20 +88,32 @@ def test_pipeline_settles_and_writes_outputs(uninterrupted):
     assert [s["name"] for s in manifest["stages"]] == [s["name"] for s in stages]
 
 
+def _kill_and_resume(
+    case: InstallationCase, out: Path, checkpoints: int
+) -> tuple[Installation, Installation, dict]:
+    """A run of ``case`` into ``out`` stopped after ``checkpoints`` checkpoints (as if killed),
+    then resumed there: the killed run, the resumed run and the resumed run's summary."""
+    killed = Installation(MPI.COMM_WORLD, case, out, progress=False)
+    assert killed.run(stop_after_checkpoints=checkpoints) == {}
+    resumed = Installation(MPI.COMM_WORLD, case, out, progress=False)
+    return killed, resumed, resumed.run(resume=True)
+
+
+def _relative_difference(run: Installation, reference: Installation) -> float:
+    """|u - u_ref| / |u_ref| of the two runs' final displacements."""
+    u_ref, u = reference.model.problem.u.x.petsc_vec, run.model.problem.u.x.petsc_vec
+    difference = u.copy()
+    difference.axpy(-1.0, u_ref)
+    return difference.norm() / u_ref.norm()
+
+
 def test_resume_equals_uninterrupted(uninterrupted, tiny_case, shared_dir):
     runner, summary, _ = uninterrupted
     out = shared_dir("install_resumed")
     case = tiny_case()
-    killed = Installation(MPI.COMM_WORLD, case, out, progress=False)
-    assert (
-        killed.run(stop_after_checkpoints=4) == {}
-    )  # 4th checkpoint: inside the first vibration stage
-    resumed = Installation(MPI.COMM_WORLD, case, out, progress=False)
-    again = resumed.run(resume=True)
-    u_ref, u = runner.model.problem.u.x.petsc_vec, resumed.model.problem.u.x.petsc_vec
-    difference = u.copy()
-    difference.axpy(-1.0, u_ref)
-    relative = difference.norm() / u_ref.norm()
+    # killed at the 4th checkpoint: inside the first vibration stage
+    _, resumed, again = _kill_and_resume(case, out, checkpoints=4)
+    relative = _relative_difference(resumed, runner)
     s_ref = np.array([r["settlement_mm"] for r in runner.history])
     s = np.array([r["settlement_mm"] for r in resumed.history])
     print(
@@ -163,14 +176,8 @@ def test_frictional_resume_repeats_the_uninterrupted_run(coarse_case, shared_dir
     full = Installation(comm, case, shared_dir("friction_full"), progress=False)
     summary = full.run()
     out = shared_dir("friction_resumed")
-    killed = Installation(comm, case, out, progress=False)
-    assert killed.run(stop_after_checkpoints=2) == {}
-    resumed = Installation(comm, case, out, progress=False)
-    again = resumed.run(resume=True)
-    u_ref, u = full.model.problem.u.x.petsc_vec, resumed.model.problem.u.x.petsc_vec
-    difference = u.copy()
-    difference.axpy(-1.0, u_ref)
-    relative = difference.norm() / u_ref.norm()
+    killed, resumed, again = _kill_and_resume(case, out, checkpoints=2)
+    relative = _relative_difference(resumed, full)
     s_ref = np.array([r["settlement_mm"] for r in full.history])
     s = np.array([r["settlement_mm"] for r in resumed.history])
     before_kill = len(killed.history)
