@@ -29,6 +29,7 @@ from solver.dynamics.loads import RampedAxialForce, TopFaceLoad, TPLoading
 from solver.dynamics.schemes import GeneralisedAlpha
 from solver.dynamics.time_loop import run
 from solver.installation.observers import Settlement
+from solver.modal.eigen import clamp
 
 pytestmark = pytest.mark.mpi
 
@@ -43,8 +44,7 @@ def landing(theta: int, gamma0: float, max_gap_change: float | None):
     joint, material, _ = geometry_from_case(read_case("scaled"))
     data = create_joint_mesh(comm, joint, MeshOptions(n_circumferential=8, axial_size=0.25))
     V = fem.functionspace(data.mesh, ("Lagrange", 2, (3,)))
-    clamped = fem.locate_dofs_topological(V, 2, data.facet_tags.find(tags.MP_CLAMPED))
-    bcs = [fem.dirichletbc(np.zeros(3), clamped, V)]
+    bcs = [clamp(V, data.facet_tags, [tags.MP_CLAMPED])]
     M, K = assemble_structure(V, material, bcs)
     contact = NitscheContact(
         V,

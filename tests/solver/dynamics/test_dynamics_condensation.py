@@ -37,6 +37,7 @@ from solver.dynamics.loads import RampedAxialForce, TopFaceLoad, TPLoading
 from solver.dynamics.schemes import GeneralisedAlpha
 from solver.dynamics.time_loop import run
 from solver.installation.observers import Settlement
+from solver.modal.eigen import clamp
 
 pytestmark = pytest.mark.mpi
 
@@ -49,8 +50,7 @@ def coarse_joint():
     options = MeshOptions(n_circumferential=N_AROUND, axial_size=0.25, contact_axial_size=0.01)
     data = create_joint_mesh(comm, joint, options)
     V = fem.functionspace(data.mesh, ("Lagrange", 2, (3,)))
-    clamped = fem.locate_dofs_topological(V, 2, data.facet_tags.find(tags.MP_CLAMPED))
-    bcs = [fem.dirichletbc(np.zeros(3), clamped, V)]
+    bcs = [clamp(V, data.facet_tags, [tags.MP_CLAMPED])]
     M, K = assemble_structure(V, material, bcs)
     contact = NitscheContact(
         V,
