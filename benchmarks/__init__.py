@@ -1,2 +1,3 @@
 """Timing and convergence scripts (run as ``python benchmarks/<name>.py``); ``phase_timer``
-instruments the time step, ``atlas`` holds the scenario atlas of ``scenarios.py``."""
+reports the time step's phases (recorded by ``common.timing``), ``atlas`` holds the scenario
+atlas of ``scenarios.py``."""

@@ -39,6 +39,7 @@ from mpi4py import MPI
 from dolfinx import fem
 
 from common.case import resolve_case_path
+from common.timing import recording
 from geometry import tags
 from geometry.mesh import create_joint_mesh
 from geometry.parameters import MeshOptions, load_geometry
@@ -307,13 +308,13 @@ def main(argv=None) -> int:
     observers = [settlement]
     if a.contact_axial_size > 0:
         observers.append(ContactZoneGuard(contact, a.contact_axial_size, a.contact_zone_above))
-    timer = PhaseTimer().install()
+    timer = PhaseTimer()
     for name, t_end, dt in stages:
         if name == "harmonic":
             problem.set_scheme(GeneralisedAlpha.from_spectral_radius(a.rho_inf))
         timer.reset()
         t0, cpu0 = time.perf_counter(), time.process_time()
-        with CsvWriter(out / f"{name}.csv", comm=comm) as writer:
+        with CsvWriter(out / f"{name}.csv", comm=comm) as writer, recording(timer):
             rows = run(
                 problem,
                 t_end,
@@ -333,7 +334,6 @@ def main(argv=None) -> int:
             f"load average {os.getloadavg()[0]:.1f})"
         )
         timer.report(comm, len(rows), int(its.sum()), say)
-    timer.uninstall()
     if a.save_displacement:
         np.save(
             out / f"displacement_rank{comm.rank}_of_{comm.size}.npy",

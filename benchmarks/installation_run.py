@@ -26,6 +26,7 @@ from mpi4py import MPI
 
 from benchmarks.phase_timer import PhaseTimer
 from common.case import read_case
+from common.timing import recording
 from solver.installation.case import InstallationCase
 from solver.installation.cli import fail
 from solver.installation.runner import Installation
@@ -113,18 +114,17 @@ def main(argv=None) -> int:
         case = InstallationCase.from_dict(read_case(a.case, a.set))
     except ValueError as e:
         return fail(comm, str(e))
-    timer = PhaseTimer().install()
+    timer = PhaseTimer()
     profile = StageProfile(comm, timer)
     runner = Installation(comm, case, a.output, progress=False, on_stage=profile)
     stopped = ""
     try:
-        runner.run(resume=a.resume)
+        with recording(timer):
+            runner.run(resume=a.resume)
     except ValueError as e:  # --resume without a checkpoint, or with one of another case
-        timer.uninstall()
         return fail(comm, str(e))
     except RuntimeError as e:  # Newton failed at the minimum step, or the band left the zone
         stopped = str(e)
-    timer.uninstall()
     setup_s = runner.model.timings_s["set-up"] if runner.model is not None else 0.0
     profile.table(setup_s, time.perf_counter() - t0)
     if stopped:  # the table holds the stages before the stop

@@ -37,6 +37,7 @@ from mpi4py import MPI
 from benchmarks.atlas.installed import restore_installed
 from benchmarks.phase_timer import PhaseTimer
 from common.case import read_case
+from common.timing import recording
 from solver.dynamics.loads import Schedule
 from solver.dynamics.time_loop import run
 from solver.installation import checkpoint
@@ -135,7 +136,7 @@ def main(argv=None) -> int:
         flush=True,
     )
     cuts = problem.failed_steps
-    timer = PhaseTimer().install()
+    timer = PhaseTimer()
     last = [time.perf_counter(), 0, 0]
     newton = []
 
@@ -155,7 +156,8 @@ def main(argv=None) -> int:
         return {}
 
     t0 = time.perf_counter()
-    rows = run(problem, problem.t + a.steps * dt, dt, observers=[log], progress=False)
+    with recording(timer):
+        rows = run(problem, problem.t + a.steps * dt, dt, observers=[log], progress=False)
     wall = time.perf_counter() - t0
     say(
         f"{len(rows)} steps: {wall / len(rows):.3f} s/step, Newton {np.mean(newton):.2f}/step, "
@@ -165,7 +167,6 @@ def main(argv=None) -> int:
         f"{wall / len(rows) / timer.triangular_solve_s():.0f}"
     )
     timer.report(comm, len(rows), int(sum(newton)), say)
-    timer.uninstall()
     return 0
 
 

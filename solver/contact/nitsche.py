@@ -34,10 +34,12 @@ import dolfinx
 import dolfinx.fem.petsc
 
 from common.material import Material
+from common.timing import timed
 from solver.contact.assembly import PointMatrices, assemble_point_vector, grouped_products
 from solver.contact.friction import FrictionLaw
 from solver.contact.law import derivative, multipliers
 from solver.contact.model import ContactState, PointOperators, Status, TrialTractions
+from solver.contact.operators import traction_operator, unrolled_dofs, vector_basis
 from solver.contact.pairing import Pairing, pair
 from solver.contact.surfaces import MasterSurface, SlaveQuadrature
 
@@ -147,6 +149,7 @@ class NitscheContact:
         self._u_old_master = self.master.displacement(u_old)
         self._updated_at = None
 
+    @timed("contact update")
     def update(self, u: dolfinx.fem.Function) -> None:
         """Pair the slave points with the deformed master surface and evaluate the contact state at u."""
         u.x.scatter_forward()
@@ -241,24 +244,16 @@ class NitscheContact:
         frozen)."""
         T = self._traction(idx)
         gdim = self.slave.gdim
-        gam = self.gamma[idx]
-        phi = self.slave.values[idx]
-        H = (phi[:, None, :, None] * np.eye(gdim)[None, :, None, :]).reshape(T.shape)
+        gam = self.gamma[idx][:, None, None]
+        H = vector_basis(self.slave.values[idx], gdim)
         pairing = self._pairing()
-        psi = pairing.master_values[idx]
-        master = gam[:, None, None, None] * psi[:, None, :, None] * np.eye(gdim)[None, :, None, :]
-        blocks = self.master.blocks[pairing.facet[idx]]
         return PointOperators(
-            slave_dofs=(self._slave_blocks[idx][:, :, None] * gdim + np.arange(gdim)).reshape(
-                len(idx), T.shape[2]
-            ),
-            E_slave=T - gam[:, None, None] * H,
-            F_slave=self.theta * T - gam[:, None, None] * H,
-            master_dofs=(blocks[:, :, None] * gdim + np.arange(gdim)).reshape(
-                len(idx), gdim * psi.shape[1]
-            ),
-            master=master.reshape(len(idx), gdim, gdim * psi.shape[1]),
-            weight=self.slave.weights[idx] / gam,
+            slave_dofs=unrolled_dofs(self._slave_blocks[idx], gdim),
+            E_slave=T - gam * H,
+            F_slave=self.theta * T - gam * H,
+            master_dofs=unrolled_dofs(self.master.blocks[pairing.facet[idx]], gdim),
+            master=gam * vector_basis(pairing.master_values[idx], gdim),
+            weight=self.slave.weights[idx] / self.gamma[idx],
         )
 
     def slip_directions(self) -> tuple[npt.NDArray, npt.NDArray]:
@@ -304,33 +299,19 @@ class NitscheContact:
 
     # -- per-point operators -------------------------------------------------------------
     def _traction(self, idx: npt.NDArray) -> npt.NDArray:
-        """Slave traction operator T: T[q, i, (a, c)] = (sigma(phi_a e_c) n)_i, shape (q, 3, ns 3) [Pa m]."""
-        mat, gdim = self.material, self.slave.gdim
-        n = self._n[idx]
-        g = self.slave.gradients[idx]  # (q, ns, 3)
-        gn = g @ n[:, :, None]  # (q, ns, 1)
-        T = mat.mu * (
-            gn[:, None, :, :] * np.eye(gdim)[None, :, None, :]
-            + g.transpose(0, 2, 1)[:, :, :, None] * n[:, None, None, :]
-        )
-        T += mat.lmbda * n[:, :, None, None] * g[:, None, :, :]
-        return T.reshape(len(idx), gdim, gdim * g.shape[1])
+        """Slave traction operator of the points ``idx`` (``traction_operator``) [Pa m]."""
+        return traction_operator(self.material, self._n[idx], self.slave.gradients[idx])
 
     def _jump(self, idx: npt.NDArray) -> npt.NDArray:
         """Jump operator v_s(x) - v_m(y) on [slave cell dofs, master facet dofs], shape (q, 3, nd)."""
-        gdim = self.slave.gdim
         phi, psi = self.slave.values[idx], self.pairing.master_values[idx]
-        basis = np.concatenate([phi, -psi], axis=1)  # (q, ns + nm)
-        return (basis[:, None, :, None] * np.eye(gdim)[None, :, None, :]).reshape(
-            len(idx), gdim, -1
-        )
+        return vector_basis(np.concatenate([phi, -psi], axis=1), self.slave.gdim)
 
     def _global_dofs(self, idx: npt.NDArray) -> npt.NDArray:
-        gdim = self.slave.gdim
         blocks = np.concatenate(
             [self._slave_blocks[idx], self.master.blocks[self.pairing.facet[idx]]], axis=1
         )
-        return (blocks[:, :, None] * gdim + np.arange(gdim)).reshape(len(idx), -1)
+        return unrolled_dofs(blocks, self.slave.gdim)
 
     def _chunks(self):
         paired = np.flatnonzero(self.pairing.paired)
@@ -338,6 +319,7 @@ class NitscheContact:
             yield paired[start : start + self.chunk]
 
     # -- assembly ------------------------------------------------------------------------
+    @timed("contact residual")
     def residual(self) -> PETSc.Vec:
         """Contact residual r(v) at the last update, a ghosted PETSc vector in V's layout [N]
         (this object's vector, overwritten by the next call: copy it to keep it).
@@ -451,6 +433,7 @@ class NitscheContact:
         vals = np.concatenate(vals) if vals else np.zeros(0)
         return self._matrices.assemble(blocks, vals, cache)
 
+    @timed("contact jacobian")
     def jacobian(self) -> PETSc.Mat:
         """Generalized-Newton Jacobian of the contact residual at the last update [N/m] (this
         object's matrix, overwritten by the next call: copy it to keep it)."""

@@ -19,6 +19,7 @@ import numpy as np
 import numpy.typing as npt
 from scipy.spatial import cKDTree
 
+from common.timing import timed
 from solver.contact.surfaces import MasterSurface, clip_to_facet
 
 __all__ = ["Pairing", "pair"]
@@ -71,6 +72,7 @@ class Pairing:
         return self.facet >= 0
 
 
+@timed("pairing")
 def pair(
     x: npt.NDArray,
     master: MasterSurface,

@@ -27,6 +27,7 @@ import numpy.typing as npt
 from mpi4py import MPI
 from petsc4py import PETSc
 
+from common.timing import timed
 from solver.contact.model import PointOperators
 from solver.dynamics.linear_algebra import direct_solver, solve_columns
 
@@ -175,6 +176,7 @@ class ContactCompliance:
         self._E = self._point_matrix(rows, cols, ops.E_slave, m)
         self._F = self._point_matrix(rows, cols, ops.F_slave * ops.weight[:, None, None], m)
 
+    @timed("compliance")
     def extend(self, ops: PointOperators, new: int, band: npt.NDArray) -> None:
         """Add this rank's last ``new`` points of ``ops`` (the operators of all of its points, the
         earlier ones first) and the master dofs ``band`` (global, the same on every rank, none
@@ -328,6 +330,7 @@ class ContactCompliance:
         index = self._band_sort[position].reshape(dofs.shape) if n else dofs
         return MasterOperator(index, values, len(self.band))
 
+    @timed("compliance")
     def matrix(self, M_b: "MasterOperator", weight: npt.NDArray) -> npt.NDArray:
         """G (3 |points| x 3 |points|, Fortran order: its transpose's rows are contiguous) for
         the master operator M_b and the points' weights w / gamma (``PointOperators.weight``,
@@ -342,6 +345,7 @@ class ContactCompliance:
         return GT.T
 
     # -- per iteration --------------------------------------------------------------------------
+    @timed("triangular solves")
     def solve(self, rhs: PETSc.Vec, out: PETSc.Vec) -> None:
         """out = A^-1 rhs (zone vectors)."""
         self.lu.solve(rhs, out)

@@ -34,6 +34,7 @@ from petsc4py import PETSc
 import dolfinx
 import dolfinx.la.petsc
 
+from common.timing import timed
 from solver.dynamics.linear_algebra import direct_solver, solve_columns
 
 __all__ = ["BulkCondensation", "bulk_parts"]
@@ -157,6 +158,7 @@ class BulkCondensation:
         chunk: interface columns per multiple-right-hand-side solve when building S.
     """
 
+    @timed("condensation")
     def __init__(
         self,
         A: PETSc.Mat,
@@ -220,6 +222,7 @@ class BulkCondensation:
         self.A_hat: PETSc.Mat | None = None
         self._condense(A)
 
+    @timed("condensation")
     def update(self, A: PETSc.Mat) -> None:
         """Condense new values of A (the same sparsity, e.g. another time step): the bulk parts are
         refactorised numerically and A_hat refilled in place (the solver objects are kept)."""
@@ -285,6 +288,7 @@ class BulkCondensation:
             self.A_hat.setValuesCSR(*arrays)
         self.A_hat.assemble()
 
+    @timed("condensation")
     def reduce_load(self, b: PETSc.Vec, out: PETSc.Vec) -> None:
         """out_Z = b_Z - A_ZB A_BB^-1 b_B (one bulk solve per part); out_B is left for ``hold_bulk``."""
         b.copy(out)
@@ -298,6 +302,7 @@ class BulkCondensation:
         """out_B = u_B: the identity rows of A_hat keep the bulk where u has it."""
         out.array[self._B] = u.x.petsc_vec.array_r[self._B]
 
+    @timed("condensation")
     def recover(self, b: PETSc.Vec, u: dolfinx.fem.Function) -> None:
         """u_B = A_BB^-1 (b_B - A_BI u_I) (one bulk solve), ghosts updated."""
         x = u.x.petsc_vec

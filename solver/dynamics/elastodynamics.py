@@ -32,6 +32,7 @@ from dolfinx import fem
 from dolfinx.fem import petsc as fem_petsc
 
 from common.material import Material
+from common.timing import timed
 from solver.contact.model import ContactModel, Status
 from solver.dynamics.condensation import BulkCondensation
 from solver.dynamics.damping import ModalDamping, RayleighDamping
@@ -171,6 +172,7 @@ class Elastodynamics:
         fem_petsc.set_bc(probe, self.bcs, alpha=0.0)
         return np.flatnonzero(probe.array_r == 0.0).astype(np.int32)  # owned bc dofs
 
+    @timed("bulk vectors")
     def _evaluate_load(self, t: float, out: PETSc.Vec) -> None:
         out.set(0.0)
         if self.load is not None:
@@ -199,6 +201,7 @@ class Elastodynamics:
             raise ValueError("the problem has no condensed bulk (contact.condense_bulk = false)")
         return self._condensation
 
+    @timed("bulk vectors")
     def _assemble_operator(self, dt: float) -> None:
         """Make A(dt) = K + c_M M + c_C (a M + b K) current: a kept one, else new values in the
         least recently used (factorised lazily by the KSP and the contact solver)."""
@@ -289,6 +292,7 @@ class Elastodynamics:
             self.damping.mult(v, self._work)
             out.axpy(scale, self._work)
 
+    @timed("bulk vectors")
     def _effective_load(self, dt: float) -> None:
         """b = (f_{n+1-alpha_f} - alpha_f r_c,n - M a_hat - C v_hat - K u_hat) / (1 - alpha_f).
 
@@ -350,6 +354,7 @@ class Elastodynamics:
             return u_old, predictor
         return predictor, u_old
 
+    @timed("other")
     def step(self, dt: float) -> StepResult:
         """Advance by dt [s]; on Newton failure the state is left unchanged."""
         if isinstance(self.damping, ModalDamping):

@@ -13,6 +13,7 @@ import numpy as np
 from mpi4py import MPI
 from petsc4py import PETSc
 
+from common.timing import timed
 from solver.dynamics.linear_algebra import direct_solver
 
 __all__ = ["FactorStore", "Factors"]
@@ -74,6 +75,7 @@ class FactorStore:
         self._spare += self._factors
         self._factors = []
 
+    @timed("factorisation")
     def factorise(self, J: PETSc.Mat, status: np.ndarray) -> Factors:
         """Factorise A + J into a new slot, or the least recently used one, and return it. When J
         carries the ``coo_pattern`` tag of the slot's J (``NitscheContact`` tags its Jacobians),

@@ -10,6 +10,8 @@ import numpy as np
 import numpy.typing as npt
 from petsc4py import PETSc
 
+from common.timing import timed
+
 __all__ = ["BlockLU", "SumOperator", "direct_solver", "forcing_term", "solve_columns"]
 
 
@@ -124,10 +126,11 @@ class BlockLU:
         self.last: tuple[int, PETSc.Vec] | None = None  # (handle of z, v)
         self._vz = self._zz = None
 
-    def setUp(self, pc):  # the factorisation is ContactNewtonSolver._factorise's
+    def setUp(self, pc):  # the factorisation is FactorStore.factorise's
         if self.zone is not None and self._vz is None:
             self._vz, self._zz = self.lu.getOperators()[0].createVecs()
 
+    @timed("triangular solves")
     def apply(self, pc, v, z):
         if self.zone is None:
             self.lu.solve(v, z)

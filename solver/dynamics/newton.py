@@ -25,7 +25,6 @@ with the Eisenstat-Walker forcing term of ``solver.dynamics.linear_algebra.forci
 workspace (and its factorisation) can be kept across steps while A is unchanged.
 """
 
-import time
 from dataclasses import dataclass, field
 
 from mpi4py import MPI
@@ -35,6 +34,7 @@ import numpy as np
 
 import dolfinx
 
+from common.timing import count, timed
 from solver.contact.model import ContactModel
 from solver.dynamics.factor_store import Factors, FactorStore
 from solver.dynamics.linear_algebra import BlockLU, SumOperator, forcing_term
@@ -66,7 +66,6 @@ class NewtonResult:
     linear_iterations: list[int] = field(default_factory=list)
     factorizations: int = 0
     message: str = ""
-    timings: dict[str, float] = field(default_factory=dict)  #: wall time per phase [s]
 
 
 def newton_stop(
@@ -219,13 +218,13 @@ class ContactNewtonSolver:
         self._current = factors
         self._preconditioner.lu = factors.lu
 
+    @timed("linear solves")
     def _correction(
         self,
         J: PETSc.Mat,
         status: np.ndarray,
         F: PETSc.Vec,
         du: PETSc.Vec,
-        timings: dict,
         eta: float,
     ) -> int:
         """Solve (A + J) du = -F to GMRES relative tolerance eta, preconditioned by the kept factors
@@ -239,7 +238,6 @@ class ContactNewtonSolver:
         self._preconditioner.last = None
         fresh = self._store.empty or self.refactor_after == 0 or self._refactor_next
         self.ksp.setTolerances(rtol=eta)
-        t0 = time.perf_counter()
         self._use(self._store.factorise(J, status) if fresh else self._store.nearest(status))
         operator = SumOperator(
             self.A, J, self._current.J_P, self._preconditioner, self._difference(J, fresh)
@@ -247,19 +245,14 @@ class ContactNewtonSolver:
         op = PETSc.Mat().createPython(self.A.getSizes(), operator, comm=self.A.getComm())
         op.setUp()
         self.ksp.setOperators(op)
-        timings["factorise"] += time.perf_counter() - t0
-        t0 = time.perf_counter()
         self.ksp.solve(rhs, du)
         its = self.ksp.getIterationNumber()
         if not fresh and self.ksp.getConvergedReason() <= 0:
-            t1 = time.perf_counter()
             self._use(self._store.factorise(J, status))
             operator.J_P, operator.difference = self._current.J_P, SumOperator.ZERO
-            timings["factorise"] += time.perf_counter() - t1
             self.ksp.solve(rhs, du)
             its += self.ksp.getIterationNumber()
             fresh = True
-        timings["linear solve"] += time.perf_counter() - t0
         # iteration counts, not timings, decide: the same on every rank (ranks that disagreed
         # would deadlock in the factorisation) and in every run, so that the reused factors,
         # and hence the results, do not depend on the machine's load
@@ -308,13 +301,12 @@ class ContactNewtonSolver:
         contact: ContactModel,
         u: dolfinx.fem.Function,
         F: PETSc.Vec,
-        timings: dict,
         update: bool = True,
     ) -> float:
         """F = linear + r_c(u) (see :func:`contact_residual`); returns ||F||."""
-        return contact_residual(linear, contact, u, F, self._bc_local, update, timings)
+        return contact_residual(linear, contact, u, F, self._bc_local, update)
 
-    def _trial(self, step: "_Step", contact, u, alpha: float, F, timings: dict) -> float:
+    def _trial(self, step: "_Step", contact, u, alpha: float, F) -> float:
         """Move to u = x0 + alpha du; returns ||F|| there (contact updated at u)."""
         x = u.x.petsc_vec
         step.x0.copy(x)
@@ -322,11 +314,9 @@ class ContactNewtonSolver:
         u.x.scatter_forward()
         step.linear0.copy(step.linear)
         step.linear.axpy(alpha, step.A_du)  # A u - b = (A x0 - b) + alpha A du
-        return self._residual(step.linear, contact, u, F, timings)
+        return self._residual(step.linear, contact, u, F)
 
-    def _newton_step(
-        self, step: "_Step", contact, u, F, norm: float, timings: dict
-    ) -> tuple[float, float]:
+    def _newton_step(self, step: "_Step", contact, u, F, norm: float) -> tuple[float, float]:
         """Save u in x0 and take the Newton step, shortened by the gap limit; if that does not lower
         ||F|| (= norm at x0) and some slipping point's friction would reverse on the way, shortened
         to where the first one would. Returns (alpha, ||F||) of the step taken."""
@@ -335,20 +325,20 @@ class ContactNewtonSolver:
         self.A.mult(step.du, step.A_du)
         gap = contact.state.gap.copy() if self.max_gap_change is not None else None
         slip = contact.slip_directions() if self.limit_reversal and self.max_backtracks else None
-        trial = self._trial(step, contact, u, 1.0, F, timings)
+        trial = self._trial(step, contact, u, 1.0, F)
         alpha = 1.0 if gap is None else self._gap_limited_step(gap, contact.state.gap)
         reversal = (
             1.0 if slip is None else self._comm.allreduce(contact.reversal_limit(*slip), op=MPI.MIN)
         )
         if alpha < 1.0:
-            trial = self._trial(step, contact, u, alpha, F, timings)
+            trial = self._trial(step, contact, u, alpha, F)
         if trial >= norm and reversal < alpha:
             alpha = reversal
-            trial = self._trial(step, contact, u, alpha, F, timings)
+            trial = self._trial(step, contact, u, alpha, F)
         return alpha, trial
 
     def _backtrack(
-        self, step: "_Step", contact, u, F, norm: float, alpha: float, trial: float, timings: dict
+        self, step: "_Step", contact, u, F, norm: float, alpha: float, trial: float
     ) -> float:
         """From the step x0 + alpha du (||F|| = trial there), halve the step (up to ``max_backtracks``
         times) while ||F|| >= norm. Generalized Newton on stick/slip/open switches can cycle (e.g.
@@ -361,11 +351,11 @@ class ContactNewtonSolver:
             if trial < norm:
                 return trial
             alpha *= 0.5
-            trial = self._trial(step, contact, u, alpha, F, timings)
+            trial = self._trial(step, contact, u, alpha, F)
             best = min(best, (trial, alpha))
         if trial < norm or best[1] == alpha:
             return trial
-        return self._trial(step, contact, u, best[1], F, timings)
+        return self._trial(step, contact, u, best[1], F)
 
     def _gap_limited_step(self, gap: np.ndarray, trial_gap: np.ndarray) -> float:
         """Largest fraction (<= 1, the same on all ranks) of the step keeping each point's approach
@@ -397,19 +387,13 @@ class ContactNewtonSolver:
         self.A.mult(x, step.linear)
         step.linear.axpy(-1.0, b)
         norms, linear = [], []
-        timings = {
-            "contact update": 0.0,
-            "contact assembly": 0.0,
-            "factorise": 0.0,
-            "linear solve": 0.0,
-        }
         b_norm = b.norm() if load_norm is None else load_norm
         factorizations0 = self.factorizations
         result = None
         step_small = False
         eta = self.forcing_max
         # e.g. a time step's predictor, where the caller evaluated the contact status
-        norm = self._residual(step.linear, contact, u, F, timings, update=not contact.updated_at(u))
+        norm = self._residual(step.linear, contact, u, F, update=not contact.updated_at(u))
         for k in range(self.max_iterations + 1):
             norms.append(norm)
             tol = max(self.atol, self.rtol * max(norms[0], b_norm), contact.residual_floor())
@@ -427,13 +411,11 @@ class ContactNewtonSolver:
                     f"iteration {best}, now {norm:.3e} N at iteration {k}",
                 )
                 break
-            t0 = time.perf_counter()
             J = contact.jacobian()  # the contact's matrix: not ours to destroy
             self._clear_bc_rows(J)
-            timings["contact assembly"] += time.perf_counter() - t0
             try:
                 eta = forcing_term(norms, eta, tol, self.forcing_max, self.krylov_rtol)
-                linear.append(self._correction(J, contact.state.status, F, step.du, timings, eta))
+                linear.append(self._correction(J, contact.state.status, F, step.du, eta))
             except (PETSc.Error, RuntimeError) as err:
                 result = NewtonResult(
                     False,
@@ -443,15 +425,15 @@ class ContactNewtonSolver:
                     message=f"linear solve failed at Newton iteration {k}: {err}",
                 )
                 break
-            alpha, trial = self._newton_step(step, contact, u, F, norm, timings)
-            norm = self._backtrack(step, contact, u, F, norm, alpha, trial, timings)
+            alpha, trial = self._newton_step(step, contact, u, F, norm)
+            norm = self._backtrack(step, contact, u, F, norm, alpha, trial)
             step_small = step.du.norm(PETSc.NormType.INFINITY) <= self.stol * x.norm(
                 PETSc.NormType.INFINITY
             )
         for vec in (F, *step.__dict__.values()):
             vec.destroy()
         result.factorizations = self.factorizations - factorizations0
-        result.timings = timings
+        count("gmres", sum(result.linear_iterations))
         return result
 
     def destroy(self) -> None:

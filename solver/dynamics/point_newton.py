@@ -28,7 +28,6 @@ that comes into contact, or a pairing that leaves the master band, extends C or 
 recomputes the compliance blocks.
 """
 
-import time
 from collections.abc import Sequence
 from typing import cast
 
@@ -39,6 +38,7 @@ from petsc4py import PETSc
 
 import dolfinx
 
+from common.timing import count, timed
 from solver.contact.model import ContactModel, Status
 from solver.contact.nitsche import NitscheContact
 from solver.dynamics.compliance import ContactCompliance
@@ -152,6 +152,7 @@ class PointNewtonSolver:
         self._compliance = None
 
     # -- the linear operator A' and the compliance blocks ------------------------------------------
+    @timed("factorisation")
     def _factorise(self, contact: NitscheContact) -> None:
         """A' = A + the linear Nitsche part at every paired point, on the zone, factorised."""
         J = contact.interface_stiffness(Status.OPEN)
@@ -314,17 +315,12 @@ class PointNewtonSolver:
         F, linear, delta = x.duplicate(), x.duplicate(), x.duplicate()
         self.A.mult(x, linear)
         linear.axpy(-1.0, b)
-        timings = {"factorise": 0.0, "compliance": 0.0, "tractions": 0.0, "contact": 0.0}
-        t0 = time.perf_counter()
         model = cast(ContactModel, contact)
         norm = contact_residual(
             linear, model, u, F, self._bc_local, update=not contact.updated_at(u)
         )
-        timings["contact"] += time.perf_counter() - t0
         if self._compliance is None:
-            t0 = time.perf_counter()
             self._factorise(contact)
-            timings["factorise"] += time.perf_counter() - t0
         compliance = self.compliance
         r_zone, d_zone, v_zone = (compliance.A.createVecLeft() for _ in range(3))
         b_norm = cast(float, b.norm()) if load_norm is None else load_norm
@@ -341,7 +337,6 @@ class PointNewtonSolver:
             result = newton_stop(norms, tol, self.max_iterations)
             if result is not None:
                 break
-            t0 = time.perf_counter()
             self._update_points(contact, first=k == 0)
             y_k, normal, mu, weight, M_b, master = self._gather_points(contact)
             mu_inner = relaxation(mu)
@@ -352,8 +347,6 @@ class PointNewtonSolver:
             G, built = self._compliance_matrix(M_b, weight, master, keep=not slow)
             r_zone.array[:] = F.array_r[self._zone_local]
             compliance.solve(r_zone, d_zone)
-            timings["compliance"] += time.perf_counter() - t0
-            t0 = time.perf_counter()
             self.jacobian.set_compliance(G)
             # lambda_k: the multipliers of R_k; the inner problem at the relaxed coefficients
             _, law_k = pointwise_law(y_k, normal, mu)
@@ -379,7 +372,6 @@ class PointNewtonSolver:
                     self._last_y = solution.y
                     break
             inner.append(solution.iterations)
-            timings["tractions"] += time.perf_counter() - t0
             if not solution.converged:
                 result = NewtonResult(
                     False,
@@ -389,7 +381,6 @@ class PointNewtonSolver:
                     f"iterations at Newton iteration {k}",
                 )
                 break
-            t0 = time.perf_counter()
             compliance.load(solution.multipliers - lam_k, M_b, weight, v_zone)
             v_zone.axpy(1.0, r_zone)
             compliance.solve(v_zone, d_zone)
@@ -398,16 +389,13 @@ class PointNewtonSolver:
             x.axpy(1.0, delta)
             u.x.scatter_forward()
             self.A.multAdd(delta, linear, linear)
-            timings["compliance"] += time.perf_counter() - t0
-            t0 = time.perf_counter()
             norm = contact_residual(linear, model, u, F, self._bc_local)
-            timings["contact"] += time.perf_counter() - t0
         for vec in (F, linear, delta, r_zone, d_zone, v_zone):
             vec.destroy()
         assert result is not None  # every way out of the loop sets it
         result.factorizations = self.factorizations - factorizations0
-        result.timings = timings
         result.linear_iterations = inner
+        count("traction iterations", sum(inner))
         return result
 
     def destroy(self) -> None:

@@ -3,7 +3,6 @@ Dirichlet rows themselves: shared by the Newton solvers of ``solver.dynamics.new
 ``solver.dynamics.point_newton``. Forces in N.
 """
 
-import time
 from typing import cast
 
 import numpy as np
@@ -45,21 +44,14 @@ def contact_residual(
     F: PETSc.Vec,
     bc_local: np.ndarray,
     update: bool = True,
-    timings: dict | None = None,
 ) -> float:
     """F = linear + r_c(u) with linear = A u - b (the contact updated at u unless ``update`` is
-    False), zero on the Dirichlet dofs ``bc_local``; returns ||F||. Adds the wall time of the
-    update and of the residual assembly to ``timings`` ("contact update", "contact assembly")."""
-    t0 = time.perf_counter()
+    False), zero on the Dirichlet dofs ``bc_local``; returns ||F||."""
     if update:
         contact.update(u)
-    t1 = time.perf_counter()
     rc = contact.residual()
     with rc.localForm() as loc:
         loc.array[bc_local[bc_local < loc.array.size]] = 0.0
     linear.copy(F)
     F.axpy(1.0, rc)
-    if timings is not None:
-        timings["contact update"] += t1 - t0
-        timings["contact assembly"] += time.perf_counter() - t1
     return cast(float, F.norm())

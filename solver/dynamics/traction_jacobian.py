@@ -29,6 +29,8 @@ import numpy.typing as npt
 import scipy.linalg
 from petsc4py import PETSc
 
+from common.timing import count
+
 __all__ = ["TractionJacobian"]
 
 Solve = Callable[[npt.NDArray], npt.NDArray]
@@ -229,6 +231,7 @@ class TractionJacobian:
         self._lu_points, self._lu_D = active.copy(), D.copy()
         self._update = None
         self.factorizations += 1
+        count("traction factorisations")
 
     def _factors_solve(self, r: npt.NDArray) -> npt.NDArray:
         """J_0^-1 r with the kept factors."""
@@ -254,6 +257,7 @@ class TractionJacobian:
             update = _Update(lu, reference, self._lu_D, active, D, changed, self._GT32)
             self._update = (key, update)
             self.updates += 1
+            count("traction updates")
         return self._update[1].solve
 
     def _krylov(
@@ -277,7 +281,9 @@ class TractionJacobian:
             pc.setType(PETSc.PC.Type.PYTHON)
             pc.setPythonContext(_Preconditioner(preconditioner))
             ksp.solve(b, x)
-            self.krylov_iterations += ksp.getIterationNumber()
+            iterations = ksp.getIterationNumber()
+            self.krylov_iterations += iterations
+            count("traction krylov", iterations)
             return x.array_r.copy(), cast(int, ksp.getConvergedReason()) > 0
         finally:
             for obj in (x, b, ksp, A):

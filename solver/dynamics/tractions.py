@@ -14,6 +14,7 @@ from typing import NamedTuple
 import numpy as np
 import numpy.typing as npt
 
+from common.timing import timed
 from solver.contact.law import Multipliers, derivative, multipliers
 from solver.dynamics.traction_jacobian import TractionJacobian
 
@@ -89,6 +90,7 @@ def stick_restart(y: npt.NDArray, normal: npt.NDArray, mu: npt.NDArray) -> npt.N
     return (P_n[:, None] * normal + scale[:, None] * P_t).ravel()
 
 
+@timed("tractions")
 def solve_tractions(
     G: npt.NDArray,
     y_free: npt.NDArray,

@@ -1,9 +1,10 @@
-"""The phase timer's tally of the inner problem's linear algebra (``benchmarks/phase_timer.py``)
-against the traction Jacobian's own counters."""
+"""The phase timer's tally of the inner problem's linear algebra (``benchmarks/phase_timer.py``,
+from ``common.timing.count``) against the traction Jacobian's own counters."""
 
 import numpy as np
 
 from benchmarks.phase_timer import PhaseTimer
+from common.timing import recording
 from solver.dynamics.traction_jacobian import TractionJacobian
 
 
@@ -14,14 +15,12 @@ def test_inner_tally_matches_the_jacobian_counters():
     G = 30.0 * G @ G.T / n
     jacobian = TractionJacobian()
     jacobian.set_compliance(G)
-    timer = PhaseTimer().install()
-    try:
+    timer = PhaseTimer()
+    with recording(timer):
         for size in (20, 20, 19, 12):  # a factorisation, a reuse, an update, a renewal
             active = np.arange(size)
             D = np.tile(np.eye(3), (size, 1, 1)) * (1.0 + 0.01 * rng.normal(size=(size, 1, 1)))
             jacobian.solve(active, D, rng.normal(size=3 * size))
-    finally:
-        timer.uninstall()
     assert jacobian.factorizations == 2 and jacobian.updates == 1
     assert dict(timer.inner) == {
         "factorisations": jacobian.factorizations,

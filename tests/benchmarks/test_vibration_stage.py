@@ -1,6 +1,8 @@
 """benchmarks/vibration_stage.py: one vibration stage from the state an installation run kept,
 with settings of the stage alone (the tiny joint)."""
 
+import re
+
 import pytest
 from mpi4py import MPI
 
@@ -17,6 +19,17 @@ def test_stage_settings_apply_to_the_installed_state(installed, capsys):
     if MPI.COMM_WORLD.rank == 0:  # the benchmark prints on rank 0
         assert "dt = 2.000e-03 s" in out  # 1 / (50 Hz x 10)
         assert "steps:" in out and "step / solve" in out  # the stage ran to its end
+        # the phase breakdown: calls per phase, from the solver's ``common.timing`` phases
+        calls = {
+            m[1]: int(m[2])
+            for m in re.finditer(r"^ {4}(\w[\w ]*?) +[\d.]+ s/step.*\((\d+) calls\)$", out, re.M)
+        }
+        assert calls["other"] == 2  # Elastodynamics.step, once per step
+        steps_phases = ("pairing", "contact update", "contact residual", "triangular solves")
+        stage_phases = ("factorisation", "compliance", "tractions", "condensation", "bulk vectors")
+        assert all(calls[phase] > 0 for phase in steps_phases + stage_phases), calls
+        # the zone Newton's phases: not the contact points' solver of this case
+        assert calls["contact jacobian"] == calls["linear solves"] == 0
 
 
 def test_a_run_of_another_case_is_refused(installed, capsys):
