@@ -11,8 +11,7 @@ Prints the figures; writes the settlement history (CSV) to --output.
 
 Default discretisation: 48 around, 0.08 m axially, 0.01 m in the contact zone, P2. One
 line per accepted step (wall time, GMRES iterations, factorisations) and, after each
-stage, the wall and CPU time per phase (pairing, contact update, residual, Jacobian
-assembly, factorisation, linear solves, bulk vectors, other; ``benchmarks/phase_timer.py``).
+stage, the wall and CPU time per phase (the phases of ``benchmarks/phase_timer.py``).
 ``--max-steps N`` stops each stage after N steps (profiling; the harmonic stage then starts
 where the ramp stopped). ``--save-displacement`` writes the final displacement per rank
 (to compare two versions of the code). The installation demo's contact settings are

@@ -4,7 +4,8 @@ Solver functions name their phase with the decorator :func:`timed` and report co
 iterations, factorisations) with :func:`count`. Both do nothing unless a :class:`PhaseTimes`
 is recording (:func:`recording`), so the solver pays one test per call. Times are
 *exclusive*: a phase called inside another is not counted in the outer one. Times are the
-calling rank's; nothing here communicates.
+calling rank's; nothing here communicates. One recorder at a time, for the process (not per
+thread).
 
     times = PhaseTimes()
     with recording(times):
@@ -38,9 +39,11 @@ class PhaseTimes:
         self._open: list[list] = []
 
     def enter(self, phase: str) -> None:
+        """Open ``phase`` (inside the phase open now, if any)."""
         self._open.append([phase, time.perf_counter(), time.process_time(), 0.0, 0.0])
 
     def exit(self) -> None:
+        """Close the phase opened last: add its time without its nested phases."""
         phase, start, cpu_start, nested, nested_cpu = self._open.pop()
         elapsed, cpu = time.perf_counter() - start, time.process_time() - cpu_start
         self.totals[phase] += elapsed - nested
@@ -51,9 +54,12 @@ class PhaseTimes:
             self._open[-1][4] += cpu
 
     def reset(self) -> None:
-        """Zero the times, calls and counts (phases open now still close into the new totals)."""
+        """Zero the times, calls and counts; phases open now count from here."""
         for table in (self.totals, self.cpu, self.calls, self.counts):
             table.clear()
+        now, cpu_now = time.perf_counter(), time.process_time()
+        for record in self._open:
+            record[1:] = [now, cpu_now, 0.0, 0.0]
 
 
 _active: PhaseTimes | None = None

@@ -244,16 +244,16 @@ class NitscheContact:
         frozen)."""
         T = self._traction(idx)
         gdim = self.slave.gdim
-        gam = self.gamma[idx][:, None, None]
-        H = vector_basis(self.slave.values[idx], gdim)
+        gam = self.gamma[idx]
+        H = gam[:, None, None] * vector_basis(self.slave.values[idx], gdim)
         pairing = self._pairing()
         return PointOperators(
             slave_dofs=unrolled_dofs(self._slave_blocks[idx], gdim),
-            E_slave=T - gam * H,
-            F_slave=self.theta * T - gam * H,
+            E_slave=T - H,
+            F_slave=self.theta * T - H,
             master_dofs=unrolled_dofs(self.master.blocks[pairing.facet[idx]], gdim),
-            master=gam * vector_basis(pairing.master_values[idx], gdim),
-            weight=self.slave.weights[idx] / self.gamma[idx],
+            master=gam[:, None, None] * vector_basis(pairing.master_values[idx], gdim),
+            weight=self.slave.weights[idx] / gam,
         )
 
     def slip_directions(self) -> tuple[npt.NDArray, npt.NDArray]:

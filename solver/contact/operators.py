@@ -1,6 +1,6 @@
 """Pointwise operators of the contact terms on the dofs of a point's slave cell (and paired
 master facet): arrays over points q, with the vector dofs unrolled as (node a, component c)
--> 3 a + c, the layout of ``NitscheContact``'s point blocks."""
+-> gdim a + c, the layout of ``NitscheContact``'s point blocks."""
 
 import numpy as np
 import numpy.typing as npt
@@ -13,8 +13,8 @@ __all__ = ["traction_operator", "unrolled_dofs", "vector_basis"]
 def traction_operator(
     material: Material, normal: npt.NDArray, gradients: npt.NDArray
 ) -> npt.NDArray:
-    """Slave traction T[q, i, (a, c)] = (sigma(phi_a e_c) n)_i from the unit normals n (q, 3) and
-    the shape-function gradients (q, nodes, 3) [1/m]; shape (q, 3, 3 nodes) [Pa m]."""
+    """Slave traction T[q, i, (a, c)] = (sigma(phi_a e_c) n)_i from the unit normals n (q, gdim)
+    and the shape-function gradients (q, nodes, gdim) [1/m]; shape (q, gdim, gdim nodes) [Pa m]."""
     gdim = normal.shape[1]
     gn = gradients @ normal[:, :, None]  # (q, nodes, 1)
     T = material.mu * (
