@@ -162,9 +162,11 @@ def _gather_rows(local: np.ndarray) -> np.ndarray:
     return np.concatenate(MPI.COMM_WORLD.allgather(local))
 
 
-def test_compliance_against_dense_product(tiny_case):
+@pytest.mark.parametrize("lu_solver", ["mumps", "superlu_dist"])
+def test_compliance_against_dense_product(tiny_case, lu_solver):
     """G = E A'^-1 F^T W of points on the tiny joint's contact surface, from the blocks of
-    ContactCompliance (built in two extensions, then restricted to part of the points and band)
+    ContactCompliance (built in two extensions, then restricted to part of the points and band;
+    on several ranks each rank solves a share of the columns with its own copy of the factors)
     and formed densely (E, F, A' gathered)."""
     comm = MPI.COMM_WORLD
     model = set_up_joint_model(comm, tiny_case())
@@ -179,7 +181,7 @@ def test_compliance_against_dense_product(tiny_case):
     )
     A_zone = A_prime.createSubMatrix(zone, zone)
     zone_dofs = np.concatenate(comm.allgather(zone.getIndices()))
-    compliance = ContactCompliance(A_zone, zone_dofs, "mumps")
+    compliance = ContactCompliance(A_zone, zone_dofs, lu_solver)
     paired = np.flatnonzero(contact.pairing.paired)
     points = paired[:: max(1, len(paired) // 40)]  # a few dozen points per rank
     half = len(points) // 2
