@@ -39,7 +39,6 @@ class StageProfile:
         self.comm, self.timer = comm, timer
         self.say = print if comm.rank == 0 else (lambda *a, **k: None)
         self.rows: list[dict] = []
-        self._gmres = 0
         self._start = 0.0
 
     def __call__(self, event: str, data) -> None:

@@ -56,7 +56,7 @@ def main(argv: list[str] | None = None) -> int:
     log = cli.say(comm)
     try:
         base = cli.load_case(args)
-        study = variants(base.mesh.axial_size)
+        study = variants(base)
         if args.variants is not None:
             study = select(study, args.variants)
         cases = [cli.load_case(args, after=v.overrides) for v in study]

@@ -258,7 +258,7 @@ def sector_partitioner(x: np.ndarray | None) -> Callable:
             destination.append(
                 np.minimum((angle * n_parts / (2 * np.pi)).astype(np.int32), n_parts - 1)
             )
-        return dolfinx.graph.adjacencylist(np.concatenate(destination).reshape(-1, 1))._cpp_object
+        return dolfinx.cpp.graph.AdjacencyList_int32(np.concatenate(destination).reshape(-1, 1))
 
     return partition
 

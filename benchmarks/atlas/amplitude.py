@@ -40,6 +40,7 @@ __all__ = [
     "BRANCH_PERIODS",
     "added_settlement",
     "amplitude_runs",
+    "next_factor",
     "non_modal_frequencies",
     "settles",
 ]
@@ -72,7 +73,7 @@ def settles(rows: list, baseline: list, steps_per_period: int, slip_rate_mm_s: f
     return bool(report.slip_episodes(t[1:], s[1:], s[0], t[0], steps_per_period, slip_rate_mm_s))
 
 
-def _next_factor(results: dict[float, bool]) -> float | None:
+def next_factor(results: dict[float, bool]) -> float | None:
     """The next factor to run given the branches run so far (factor -> settles), or None when
     the threshold is bracketed to ``BRACKET`` or lies outside ``FACTOR_RANGE``."""
     if not results:
@@ -182,7 +183,7 @@ def amplitude_runs(
                 keep_run(comm, folder, result)
             if k > 0:
                 results[k] = settles(runs[f"{k:.6g}"], runs["0"], steps, slip_rate)
-            k = _next_factor(results)
+            k = next_factor(results)
     result["wall_s"] = wall_kept + time.perf_counter() - wall
     keep_run(comm, folder, result)
     return result

@@ -28,7 +28,7 @@ from benchmarks.atlas.settled import settle
 from benchmarks.atlas.stepping import advance, joint_state
 from solver.dynamics.loads import Schedule, Stage, eccentric_amplitude
 from solver.installation import checkpoint
-from solver.installation.dismount import pull_out_force
+from solver.installation.dismount import SEPARATION_FRACTION, pull_out_force
 from solver.installation.frequencies import Excitation
 from solver.installation.model import JointModel, attach_vibration
 from solver.installation.planning import compensate
@@ -36,7 +36,6 @@ from solver.installation.settings import StaticForceSettings
 
 __all__ = ["dismount_branches", "dismount_runs", "lift_rate", "released", "separated"]
 
-SEPARATION_FRACTION = 0.01  #: normal force below this fraction of the settled one: separated
 CHUNKS = 10  #: a vibration branch stops at the first of these chunks that ends released
 
 

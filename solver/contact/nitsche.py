@@ -158,7 +158,6 @@ class NitscheContact:
         self._u_slave_nodes = u.x.array.reshape(-1, gdim)[slave.dofs]
         u_s = np.einsum("pn,pni->pi", slave.values, self._u_slave_nodes)
         disp = self.master.displacement(u)
-        self._disp = disp
         x = slave.points + u_s
         if self.pairing is not None:  # keep facets at kinks, warm-start the projection
             p = pair(x, self.master, disp, previous=self.pairing.facet, previous_s=self.pairing.s)

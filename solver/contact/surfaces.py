@@ -235,7 +235,6 @@ class MasterSurface:
             comm, blocks.astype(np.int64)
         )  #: global block (node) indices (nF, ncl)
         self.orientation = _gather(comm, orientation)
-        self.num_local = len(facets)
         #: deformation-free positions at the facet element's nodes (nF, nfc, gdim) [m]
         self.facet_coords = np.einsum(
             "fij,fid->fjd", el.coord_restriction[self.local_facet], self.coords

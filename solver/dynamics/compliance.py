@@ -131,7 +131,6 @@ class ContactCompliance:
         self.band = np.zeros(0, dtype=np.int64)
         self._counts = [0] * self.comm.size  # points per rank
         self._to_block = np.zeros(0, dtype=np.int64)  # block row of each rank-major row
-        self.solves = 0  #: columns solved so far
         self._E: PETSc.Mat | None = None
         self._F: PETSc.Mat | None = None
         self.reset()
@@ -331,7 +330,6 @@ class ContactCompliance:
         solve_columns(factor, A, len(share), entries, consume, width, self._sparse)
         for mat in (E, F):
             mat.destroy()
-        self.solves += n
 
         def joined(out: list[npt.NDArray], rows: int) -> npt.NDArray:
             return _gather_columns(self.comm, np.hstack(out) if out else np.zeros((rows, 0)), n)

@@ -100,29 +100,3 @@ class ModalDamping:
             raise ValueError(
                 f"time step {dt} s too large for explicit modal damping (2 zeta omega dt = {worst:.3g} > 0.5)"
             )
-
-
-def rayleigh_from_dict(data: dict) -> RayleighDamping:
-    """Rayleigh damping from a ``[damping]`` table.
-
-    ``{zeta = 0.01, frequency_hz = 120.0}`` (minimum at one frequency), or
-    ``{zeta = [0.01, 0.02], frequency_hz = [50.0, 200.0]}`` (two frequencies), or
-    ``{a = ..., b = ...}`` (coefficients in 1/s and s).
-    """
-    keys = set(data) - {"kind"}
-    if data.get("kind", "rayleigh") != "rayleigh":
-        raise ValueError(f"[damping] kind must be 'rayleigh' here, got {data.get('kind')!r}")
-    if keys and keys <= {"a", "b"}:
-        return RayleighDamping(a=float(data.get("a", 0.0)), b=float(data.get("b", 0.0)))
-    if keys != {"zeta", "frequency_hz"}:
-        raise ValueError(
-            f"[damping] needs zeta and frequency_hz (or a and b), got keys {sorted(keys)}"
-        )
-    zeta, f = data["zeta"], data["frequency_hz"]
-    if isinstance(zeta, (int, float)) and isinstance(f, (int, float)):
-        return RayleighDamping.at_frequency(float(zeta), float(f))
-    if isinstance(zeta, list) and isinstance(f, list) and len(zeta) == len(f) == 2:
-        return RayleighDamping.from_two_frequencies(zeta[0], f[0], zeta[1], f[1])
-    raise ValueError(
-        f"[damping] zeta and frequency_hz must be two numbers or two lists of two, got {zeta!r}, {f!r}"
-    )

@@ -130,7 +130,6 @@ class PointNewtonSolver:
         self._candidates = np.zeros(0, dtype=np.int64)  # this rank's candidate points
         self._far_solves = np.zeros(0, dtype=np.int64)  # solves each candidate has been far
         self.factorizations = 0  #: LU factorisations of A'
-        self.builds = 0  #: extensions of the compliance blocks
 
     def set_operator(self, A: PETSc.Mat) -> None:
         """A has new values (another time step): A' is factorised and the blocks rebuilt at the
@@ -257,7 +256,6 @@ class PointNewtonSolver:
             self._candidates = candidates
             self._far_solves = np.concatenate([self._far_solves, np.zeros(len(new), np.int64)])
             self._G_master = None  # the earlier points keep their places: the factors stay
-            self.builds += 1
 
     def _band_dofs(self, master_dofs: npt.NDArray) -> npt.NDArray:
         """The master dofs (``PointOperators.master_dofs``) of the points of every rank (sorted)."""

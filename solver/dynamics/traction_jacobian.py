@@ -128,8 +128,7 @@ class TractionJacobian:
     """Solves (I + G_aa D_a) dy_a = r for a compliance G (3 np x 3 np) and active points a.
 
     ``G`` is replaced (:meth:`set_compliance`) when the pairing changes; the factors then stay as
-    a preconditioner. Counters: ``factorizations``, ``updates``, ``krylov_iterations`` and
-    ``direct_solves``.
+    a preconditioner. Counters: ``factorizations``, ``updates`` and ``krylov_iterations``.
 
     Args:
         max_krylov: FGMRES iterations with the kept factors before they are renewed.
@@ -161,7 +160,6 @@ class TractionJacobian:
         self.factorizations = 0
         self.updates = 0  #: Woodbury updates of the kept factors to another active set
         self.krylov_iterations = 0
-        self.direct_solves = 0  #: double-precision solves where FGMRES with new factors failed
 
     def set_compliance(self, G: npt.NDArray) -> None:
         """A new G of the same points, or of more points appended to them (the factors are kept
@@ -299,7 +297,6 @@ class TractionJacobian:
         self._factorise(active, D)
         dy, converged = self._krylov(active, D, r, self._factors_solve)
         if not converged:  # J too ill-conditioned for single-precision factors
-            self.direct_solves += 1
             cols = _dofs(active)
             J = self._jacobian(active, D, self._GT[np.ix_(cols, cols)])
             return scipy.linalg.solve(J, r, check_finite=False)

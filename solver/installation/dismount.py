@@ -10,7 +10,7 @@ at 'ranked 1', 'ranked 2', ... with the pull held (``[[schedule]]``).
 
 :func:`dismount_table` reads the run per stage: the TP's axial motion (settlement change,
 negative = the TP moved up) and whether it separated: the contact normal force at the end of
-the stage below ``separation_fraction`` of the normal force at the end of the self-weight
+the stage below ``SEPARATION_FRACTION`` of the normal force at the end of the self-weight
 stage (0 when every contact point is open); ``dismount.csv`` has the columns
 ``DISMOUNT_COLUMNS``. SI units: N, s, mm in the tables as named.
 
@@ -43,6 +43,9 @@ DISMOUNT_COLUMNS = [
     "open_fraction_end",
     "separated",
 ]
+#: a stage separated the joint where its contact normal force ends below this fraction of the
+#: self-weight stage's (or every contact point is open)
+SEPARATION_FRACTION = 0.01
 
 
 @dataclass(frozen=True)
@@ -123,7 +126,6 @@ def dismount_table(
     stages: list[dict[str, Any]],
     roles: list[str],
     static_force: Callable[[float], float],
-    separation_fraction: float = 0.01,
 ) -> list[dict[str, Any]]:
     """Per stage after the self-weight stage: axial motion and separation (see module doc);
     ``static_force`` [N] against time [s] (``JointModel.static``)."""
@@ -151,7 +153,7 @@ def dismount_table(
                 "normal_force_min_N": float(normal.min()),
                 "open_fraction_end": open_end,
                 "separated": bool(
-                    open_end >= 1.0 or normal[-1] <= separation_fraction * abs(reference)
+                    open_end >= 1.0 or normal[-1] <= SEPARATION_FRACTION * abs(reference)
                 ),
             }
         )

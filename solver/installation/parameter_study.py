@@ -14,6 +14,7 @@ from __future__ import annotations
 from dataclasses import dataclass
 from typing import Any
 
+from solver.installation.case import InstallationCase
 from solver.post.report import sustained_rate_mm_s
 
 
@@ -27,12 +28,16 @@ class Variant:
     overrides: tuple[str, ...] = ()  #: ``table.key=value`` applied on top of the base case
 
 
-def variants(base_axial_size: float) -> list[Variant]:
-    """The parameter-study variants of docs/physics.md §4, each varied alone from the base case
-    (reference friction 0.5/0.4, d_c = 100 s/m, Rayleigh damping, axial element size ``base_axial_size`` [m])."""
+def variants(base: InstallationCase) -> list[Variant]:
+    """The parameter-study variants of docs/physics.md §4, each varied alone from the ``base``
+    case (its label: the base case's friction, damping model and axial element size)."""
+    friction, base_axial_size = base.friction, base.mesh.axial_size
     return [
         Variant(
-            "base", "base", f"mu 0.5/0.4, d_c 100 s/m, rayleigh, {1e3 * base_axial_size:.0f} mm"
+            "base",
+            "base",
+            f"mu {friction.mu_s:g}/{friction.mu_d:g}, d_c {friction.d_c:g} s/m, "
+            f"{base.damping.model}, {1e3 * base_axial_size:.0f} mm",
         ),
         Variant(
             "low_friction",

@@ -33,10 +33,8 @@ from dataclasses import asdict, replace
 from pathlib import Path
 from typing import Any
 
-import numpy as np
 from mpi4py import MPI
 
-from solver.contact import Status
 from solver.dynamics.elastodynamics import Elastodynamics
 from solver.dynamics.loads import Schedule, TPLoading
 from solver.dynamics.time_loop import run
@@ -140,12 +138,7 @@ class Installation:
             cuts, failed[0] = problem.failed_steps - failed[0], problem.failed_steps
             prev_t = self.history[-1]["time_s"] if self.history else 0.0
             schedule = loading.schedule or (loading.shaker[1] if loading.shaker else None)
-            state = model.contact.state
-            counts = np.array(
-                [np.count_nonzero(state.status == s) for s in (Status.STICK, Status.SLIP)]
-            )
-            counts = self.comm.allreduce(counts, op=MPI.SUM)
-            n_points = self.comm.allreduce(len(state.status))
+            fractions = report.contact_counts(model.contact)
             normal, _ = model.contact.forces()
             row = {
                 "time_s": t,
@@ -159,8 +152,8 @@ class Installation:
                 **model.settlement(problem),
                 "newton_iterations": problem.last_result.iterations if problem.last_result else 0,
                 "step_cuts": cuts,
-                "stick_fraction": counts[0] / n_points,
-                "slip_fraction": counts[1] / n_points,
+                "stick_fraction": fractions["stick_fraction"],
+                "slip_fraction": fractions["slip_fraction"],
                 "normal_force_N": normal,
             }
             self.history.append(row)

@@ -8,7 +8,7 @@ import pytest
 from benchmarks.atlas.amplitude import (
     BRACKET,
     FACTOR_RANGE,
-    _next_factor,
+    next_factor,
     added_settlement,
     settles,
 )
@@ -17,7 +17,7 @@ from benchmarks.atlas.amplitude import (
 def bracket(threshold: float) -> dict[float, bool]:
     """The branches the search runs when every factor >= ``threshold`` settles."""
     results: dict[float, bool] = {}
-    while (k := _next_factor(results)) is not None:
+    while (k := next_factor(results)) is not None:
         results[k] = k >= threshold
     return results
 

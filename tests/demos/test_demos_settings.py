@@ -274,7 +274,7 @@ def test_parameter_study_summary_carries_the_sustained_rate():
             (1, "vibration 1", 99.65, 2.1, 2.13, 0.6, 0.05),
         ]
     ]
-    rows = summary_rows(variants(0.08)[0], stages, [SimpleNamespace(role="control")], "done")
+    rows = summary_rows(variants(_case())[0], stages, [SimpleNamespace(role="control")], "done")
     assert all(list(r) == SUMMARY_COLUMNS for r in rows)
     assert [r["role"] for r in rows] == ["self-weight", "control"]
     assert rows[1]["gained_mm"] == 0.6
@@ -284,8 +284,12 @@ def test_parameter_study_summary_carries_the_sustained_rate():
 def test_parameter_study_varies_one_thing_at_a_time():
     from solver.installation.parameter_study import select, variants
 
-    study = variants(0.25)
     base = _case()
+    study = variants(base)
+    assert study[0].value == "mu 0.5/0.4, d_c 100 s/m, rayleigh, 80 mm"
+    assert variants(_case("friction.mu_s=0.6", "damping.model='modal'"))[0].value.startswith(
+        "mu 0.6/0.4, d_c 100 s/m, modal"
+    )
     assert [v.name for v in study][0] == "base" and study[0].overrides == ()
     changed = {}
     for v in study[1:]:
@@ -305,7 +309,7 @@ def test_parameter_study_varies_one_thing_at_a_time():
     low = _case(*study[1].overrides).friction
     assert (low.mu_s, low.mu_d) == (0.0625, 0.05)
     assert _case(*study[2].overrides).friction.d_c == 1.0
-    assert _case(*study[4].overrides).mesh.axial_size == 0.125
+    assert _case(*study[4].overrides).mesh.axial_size == 0.5 * base.mesh.axial_size
     assert [v.name for v in select(study, ["slow_decay"])] == ["base", "slow_decay"]
     with pytest.raises(ValueError, match="unknown variant"):
         select(study, ["wet_friction"])

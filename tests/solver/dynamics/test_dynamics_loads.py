@@ -195,25 +195,3 @@ def test_point_outside_the_body_raises(tube):
         PointLoad(V, [0.0, 0.0, 0.5])  # on the axis: inside the tube's hole
     with pytest.raises(ValueError, match="outside the part"):
         shaker_point(TP, 0.0, 2.0, 0.0)
-
-
-def test_rayleigh_from_case_table():
-    from solver.dynamics.damping import RayleighDamping, rayleigh_from_dict
-
-    assert rayleigh_from_dict(
-        {"zeta": 0.01, "frequency_hz": 120.0}
-    ) == RayleighDamping.at_frequency(0.01, 120.0)
-    two = rayleigh_from_dict(
-        {"kind": "rayleigh", "zeta": [0.01, 0.02], "frequency_hz": [50.0, 200.0]}
-    )
-    assert two.ratio(200.0) == pytest.approx(0.02)
-    assert rayleigh_from_dict({"a": 1.0}) == RayleighDamping(a=1.0, b=0.0)
-    for bad in (
-        {"zeta": 0.01},
-        {"zeta": [0.01], "frequency_hz": [50.0]},
-        {"kind": "modal", "zeta": 0.01},
-        {"zeta": 0.01, "frequency_hz": -5.0},
-        {"a": -1.0},
-    ):
-        with pytest.raises(ValueError):
-            rayleigh_from_dict(bad)
