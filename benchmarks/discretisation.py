@@ -24,6 +24,7 @@ from mpi4py import MPI
 
 from common.case import read_case
 from solver.dynamics.time_loop import run
+from solver.installation import cli
 from solver.installation.case import InstallationCase
 from solver.installation.model import free_dropped_joints, set_up_joint_model
 from solver.modal.eigen import EigenOptions, modal_analysis
@@ -76,7 +77,7 @@ def main(argv=None) -> int:
     )
     a = p.parse_args(argv)
     comm = MPI.COMM_WORLD
-    say = print if comm.rank == 0 else (lambda *args, **kw: None)
+    say = cli.say(comm)
     rows = []
     for label, overrides in DISCRETISATIONS:
         r = measure(comm, InstallationCase.from_dict(read_case(a.case, a.set + overrides)))
@@ -85,7 +86,6 @@ def main(argv=None) -> int:
         say(
             f"{label}: {r['dofs']} dofs, {r['s_per_step']:.2f} s/step (Newton {r['newton']:.2f}/step), "
             f"frequencies {' '.join(f'{f:.2f}' for f in r['frequencies'])} Hz",
-            flush=True,
         )
     reference = rows[-1][1]["frequencies"]
     say(

@@ -48,7 +48,7 @@ from solver.dynamics.elastodynamics import Elastodynamics, assemble_structure
 from solver.dynamics.loads import RampedAxialForce, Schedule, Stage, TopFaceLoad, TPLoading
 from solver.dynamics.schemes import GeneralisedAlpha
 from solver.dynamics.time_loop import run
-from solver.installation import checkpoint
+from solver.installation import checkpoint, cli
 from solver.installation.observers import ContactZoneGuard, Settlement
 from solver.modal.eigen import clamp
 from solver.post.csv import CsvWriter
@@ -75,7 +75,6 @@ class StepLog:
         self.say(
             f"    t = {problem.t:.6f} s: {now - t0:6.2f} s wall, GMRES {gmres - g0}, "
             f"factorisations {factorisations - f0}",
-            flush=True,
         )
         return {}
 
@@ -279,7 +278,7 @@ def main(argv=None) -> int:
     per_rank = comm.allgather(contact.slave.num_points)
     points = sum(per_rank)
     setup = time.perf_counter() - t0
-    say = print if comm.rank == 0 else (lambda *args, **kw: None)
+    say = cli.say(comm)
     say(
         f"joint: {dofs} dofs, degree {a.degree}, {a.n_circumferential} around, {a.axial_size} m axial "
         f"({a.contact_axial_size} m in the contact zone), {points} slave points, "

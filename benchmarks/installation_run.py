@@ -28,7 +28,7 @@ from benchmarks.phase_timer import PhaseTimer
 from common.case import read_case
 from common.timing import recording
 from solver.installation.case import InstallationCase
-from solver.installation.cli import fail
+from solver.installation import cli
 from solver.installation.runner import Installation
 
 
@@ -37,7 +37,7 @@ class StageProfile:
 
     def __init__(self, comm: MPI.Comm, timer: PhaseTimer):
         self.comm, self.timer = comm, timer
-        self.say = print if comm.rank == 0 else (lambda *a, **k: None)
+        self.say = cli.say(comm)
         self.rows: list[dict] = []
         self._start = 0.0
 
@@ -74,7 +74,6 @@ class StageProfile:
                 f"iterations {row['tractions_per_step']:.1f}/step, "
                 f"{row['factorisations']} factorisations, {row['step_cuts']} step cuts; one triangular "
                 f"solve {row['solve_ms']:.1f} ms, step / solve = {row['ratio']:.1f}",
-                flush=True,
             )
             self.timer.report(self.comm, steps, int(round(newton)), self.say)
 
@@ -112,7 +111,7 @@ def main(argv=None) -> int:
     try:
         case = InstallationCase.from_dict(read_case(a.case, a.set))
     except ValueError as e:
-        return fail(comm, str(e))
+        return cli.fail(comm, str(e))
     timer = PhaseTimer()
     profile = StageProfile(comm, timer)
     runner = Installation(comm, case, a.output, progress=False, on_stage=profile)
@@ -121,13 +120,13 @@ def main(argv=None) -> int:
         with recording(timer):
             runner.run(resume=a.resume)
     except ValueError as e:  # --resume without a checkpoint, or with one of another case
-        return fail(comm, str(e))
+        return cli.fail(comm, str(e))
     except RuntimeError as e:  # Newton failed at the minimum step, or the band left the zone
         stopped = str(e)
     setup_s = runner.model.timings_s["set-up"] if runner.model is not None else 0.0
     profile.table(setup_s, time.perf_counter() - t0)
     if stopped:  # the table holds the stages before the stop
-        profile.say(f"\nrun stopped: {stopped}", flush=True)
+        profile.say(f"\nrun stopped: {stopped}")
         return 1
     return 0
 

@@ -22,6 +22,7 @@ import numpy as np
 from mpi4py import MPI
 
 from common.case import read_case
+from solver.installation import cli
 from solver.installation.case import InstallationCase
 from solver.installation.model import set_up_joint_model
 from solver.post.report import slip_episodes
@@ -53,7 +54,7 @@ def main(argv=None) -> int:
     )
     a = p.parse_args(argv)
     comm = MPI.COMM_WORLD
-    say = print if comm.rank == 0 else (lambda *args, **kw: None)
+    say = cli.say(comm)
     own = InstallationCase.from_dict(read_case(a.case, a.set))
     vibration = InstallationCase.from_dict(read_case(a.case, a.set + ['self_weight.scheme=""']))
     results = {}
@@ -64,7 +65,6 @@ def main(argv=None) -> int:
             f"{r['newton']:.2f}/step; settlement {r['ramp_mm']:.4f} mm at the end of the ramp, {r['end_mm']:.4f} mm "
             f"at the end; {len(r['events'])} stick-slip events of "
             f"{', '.join(f'{1e3 * e:.1f}' for e in r['events'])} um",
-            flush=True,
         )
     a_, b_ = results["self-weight scheme"], results["vibration scheme"]
     say(

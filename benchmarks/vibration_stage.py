@@ -40,7 +40,7 @@ from common.case import read_case
 from common.timing import recording
 from solver.dynamics.loads import Schedule
 from solver.dynamics.time_loop import run
-from solver.installation import checkpoint
+from solver.installation import checkpoint, cli
 from solver.installation.case import InstallationCase
 from solver.installation.model import attach_vibration, set_up_joint_model
 
@@ -89,9 +89,12 @@ def main(argv=None) -> int:
         p.error("--stage needs --installed")
     if a.stage_set and a.installed is None and not (a.checkpoint and Path(a.checkpoint).exists()):
         p.error("--stage-set needs --installed or the settled state of an existing --checkpoint")
-    amplitude = a.amplitude if a.amplitude == "eccentric" else float(a.amplitude)
+    try:
+        amplitude = cli.amplitude(a.amplitude)
+    except ValueError as err:
+        p.error(str(err))
     comm = MPI.COMM_WORLD
-    say = print if comm.rank == 0 else (lambda *args, **kw: None)
+    say = cli.say(comm)
     try:
         case = InstallationCase.from_dict(read_case(a.case, a.set + a.stage_set))
     except (ValueError, FileNotFoundError) as err:
@@ -104,13 +107,11 @@ def main(argv=None) -> int:
     else:
         model = set_up_joint_model(comm, case)
     problem = model.problem
-    say(f"{a.case}: {model.n_dofs} dofs", flush=True)
+    say(f"{a.case}: {model.n_dofs} dofs")
     record = {"case": a.case, "overrides": a.set}
     if a.installed is not None:
         kept = "" if a.stage is None else f", after its stage {a.stage}"
-        say(
-            f"installed state restored from {a.installed}{kept} (t = {problem.t:.3f} s)", flush=True
-        )
+        say(f"installed state restored from {a.installed}{kept} (t = {problem.t:.3f} s)")
     elif a.checkpoint is not None and checkpoint.exists(a.checkpoint, comm):
         saved = checkpoint.read_manifest(a.checkpoint, comm)
         if {key: saved.get(key) for key in record} != record:
@@ -118,11 +119,11 @@ def main(argv=None) -> int:
                 f"{a.checkpoint} holds a state of --case {saved.get('case')} with --set {saved.get('overrides')}"
             )
         checkpoint.restore(a.checkpoint, problem)
-        say(f"settled state restored from {a.checkpoint} (t = {problem.t:.3f} s)", flush=True)
+        say(f"settled state restored from {a.checkpoint} (t = {problem.t:.3f} s)")
     else:
         t0 = time.perf_counter()
         model.run_self_weight()
-        say(f"self-weight stage: {time.perf_counter() - t0:.1f} s", flush=True)
+        say(f"self-weight stage: {time.perf_counter() - t0:.1f} s")
         if a.checkpoint is not None:
             checkpoint.save(a.checkpoint, problem, record)
     settled = model.settlement(problem)["settlement_mm"]
@@ -133,7 +134,6 @@ def main(argv=None) -> int:
     say(
         f"settlement {settled:.4f} mm; {a.frequency} Hz, amplitude {amplitude}, "
         f"{case.vibration.forcing} forcing, dt = {dt:.3e} s",
-        flush=True,
     )
     cuts = problem.failed_steps
     timer = PhaseTimer()
@@ -150,7 +150,6 @@ def main(argv=None) -> int:
             f"GMRES {gmres - last[1]}, factorisations {factorisations - last[2]}, settlement "
             f"{model.settlement(problem)['settlement_mm']:.5f} mm; ||F|| [N] "
             + " ".join(f"{r:.1e}" for r in result.residual_norms),
-            flush=True,
         )
         last[:] = [now, gmres, factorisations]
         return {}

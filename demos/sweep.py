@@ -63,15 +63,6 @@ def sweep_stages(kind: str, values: dict[str, float], amplitude: float | str) ->
     return [{k: v for k, v in asdict(s).items() if v is not None} for s in stages]
 
 
-def amplitude_value(text: str) -> float | str:
-    if text == "eccentric":
-        return text
-    try:
-        return float(text)
-    except ValueError:
-        raise ValueError(f"--amplitude must be 'eccentric' or a force in N, got {text!r}") from None
-
-
 def main(argv: list[str] | None = None) -> int:
     p = cli.parser(__doc__.splitlines()[0], "output/sweep", DEFAULT_CASE, QUICK_CASE)
     p.add_argument(
@@ -112,7 +103,7 @@ def main(argv: list[str] | None = None) -> int:
         if wrong:
             option = "--" + wrong[0].replace("_", "-")
             raise ValueError(f"{option} does not apply to --sweep {args.sweep}")
-        stages = sweep_stages(args.sweep, values, amplitude_value(args.amplitude))
+        stages = sweep_stages(args.sweep, values, cli.amplitude(args.amplitude))
 
         def edit(data: dict) -> None:
             data["schedule"] = [{**s, **_direction(data)} for s in stages]

@@ -217,6 +217,17 @@ def run(
     return runner, 0
 
 
+def amplitude(text: str) -> float | str:
+    """A force amplitude given on the command line: "eccentric" (the motors' 0.3632 f^2 N) or
+    a force [N]; ValueError otherwise."""
+    if text == "eccentric":
+        return text
+    try:
+        return float(text)
+    except ValueError:
+        raise ValueError(f"--amplitude must be 'eccentric' or a force in N, got {text!r}") from None
+
+
 def say(comm: MPI.Comm) -> Callable[[str], None]:
     """print on rank 0, flushed (progress messages)."""
     return lambda s: print(s, flush=True) if comm.rank == 0 else None

@@ -28,6 +28,8 @@ from typing import Any
 
 import numpy as np
 
+from solver.installation.settings import SelfWeightSettings, VibrationSettings
+
 DISMOUNT_COLUMNS = [
     "stage",
     "role",
@@ -105,14 +107,15 @@ def dismount_case(case: dict[str, Any], plan: DismountPlan) -> None:
     pull = [ranked(k + 1) for k in range(plan.n_frequencies)]
     case["schedule"] = install + [still(plan.ramp_s), still(plan.hold_s)] + pull
     t_pull = plan.n_install * plan.stage_duration_s
-    force_sw = float(case.get("self_weight", {}).get("force_N", -10e3))
+    force_sw = float(case.get("self_weight", {}).get("force_N", SelfWeightSettings.force_N))
     times, forces = [t_pull + plan.ramp_s], [plan.pull_N]
     if t_pull > 0:
         times, forces = [t_pull] + times, [force_sw] + forces
     case["static_force"] = {"times_s": times, "forces_N": forces}
     vibration = case.setdefault("vibration", {})
     needed = max(plan.n_install, plan.n_frequencies)
-    vibration["n_frequencies"] = max(int(vibration.get("n_frequencies", 3)), needed)
+    default = VibrationSettings.n_frequencies
+    vibration["n_frequencies"] = max(int(vibration.get("n_frequencies", default)), needed)
 
 
 def pull_out_force(normal_N: float, mu: float, alpha_rad: float) -> float:
