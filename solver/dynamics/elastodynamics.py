@@ -40,7 +40,7 @@ from solver.dynamics.linear_algebra import direct_solver
 from solver.dynamics.newton import ContactNewtonSolver
 from solver.dynamics.point_newton import PointNewtonSolver
 from solver.dynamics.schemes import GeneralisedAlpha, Scheme
-from solver.elasticity import epsilon, sigma
+from solver.elasticity import elastic_forms
 
 #: the Newton solvers of a contact step, by name
 CONTACT_SOLVERS = {"zone": ContactNewtonSolver, "points": PointNewtonSolver}
@@ -55,11 +55,9 @@ def assemble_structure(
     extra_stiffness: ufl.Form | None = None,
 ) -> tuple[PETSc.Mat, PETSc.Mat]:
     """Mass M [kg] and stiffness K [N/m] of linear elasticity on V (bc rows: identity)."""
-    u, w = ufl.TrialFunction(V), ufl.TestFunction(V)
-    k = ufl.inner(sigma(u, material), epsilon(w)) * ufl.dx
+    k, m = elastic_forms(V, material)
     if extra_stiffness is not None:
         k = k + extra_stiffness
-    m = material.rho * ufl.inner(u, w) * ufl.dx
     K = fem_petsc.assemble_matrix(fem.form(k), bcs=bcs)
     K.assemble()
     M = fem_petsc.assemble_matrix(fem.form(m), bcs=bcs)

@@ -24,7 +24,6 @@ from typing import Protocol
 from common import backend  # noqa: F401  (before dolfinx/petsc4py/slepc4py)
 
 import numpy as np
-import ufl
 from dolfinx import fem
 from dolfinx.fem.petsc import assemble_matrix
 from mpi4py import MPI
@@ -32,7 +31,7 @@ from petsc4py import PETSc
 from slepc4py import SLEPc
 
 from common.material import Material
-from solver.elasticity import epsilon, sigma
+from solver.elasticity import elastic_forms
 
 _solver_ids = count()
 
@@ -86,17 +85,6 @@ class ModalResult:
     @property
     def V(self) -> fem.FunctionSpace:
         return self.modes[0].function_space
-
-
-def elastic_forms(
-    V: fem.FunctionSpace, material: Material, dx: ufl.Measure | None = None
-) -> tuple[ufl.Form, ufl.Form]:
-    """Stiffness and mass bilinear forms int sigma(u):eps(v) dx and int rho u.v dx."""
-    dx = ufl.dx(domain=V.mesh) if dx is None else dx
-    u, v = ufl.TrialFunction(V), ufl.TestFunction(V)
-    k_form = ufl.inner(sigma(u, material), epsilon(v)) * dx
-    m_form = material.rho * ufl.inner(u, v) * dx
-    return k_form, m_form
 
 
 def clamp(V: fem.FunctionSpace, facet_tags, tags: Sequence[int]) -> fem.DirichletBC:
