@@ -78,9 +78,16 @@ def main(argv=None) -> int:
     a = p.parse_args(argv)
     comm = MPI.COMM_WORLD
     say = cli.say(comm)
+    try:  # every case checked before the first is computed
+        cases = [
+            InstallationCase.from_dict(read_case(a.case, a.set + overrides))
+            for _, overrides in DISCRETISATIONS
+        ]
+    except (ValueError, FileNotFoundError) as err:
+        return cli.fail(comm, str(err))
     rows = []
-    for label, overrides in DISCRETISATIONS:
-        r = measure(comm, InstallationCase.from_dict(read_case(a.case, a.set + overrides)))
+    for (label, _), case in zip(DISCRETISATIONS, cases):
+        r = measure(comm, case)
         rows.append((label, r))
         free_dropped_joints()  # the last joint's PETSc objects, before the next (larger) one
         say(

@@ -17,6 +17,7 @@ import argparse
 import resource
 import sys
 import time
+from collections.abc import Callable
 
 from common import backend  # noqa: F401  (before dolfinx)
 
@@ -26,6 +27,7 @@ from mpi4py import MPI
 from common.case import read_case
 from geometry import tags
 from solver.modal.classify import classify
+from solver.installation import cli
 from solver.modal.joint import JointCase, joint_modes
 
 REFINEMENTS = [  # (label, overrides) -- the first one is the default discretisation
@@ -38,6 +40,7 @@ REFINEMENTS = [  # (label, overrides) -- the first one is the default discretisa
     ("96 around, p=2", ["modal.n_circumferential=96", "modal.degree=2"]),
     ("48 around, p=3", ["modal.n_circumferential=48"]),
 ]
+TEN_MODES = ["modal.n_modes=10"]  #: the convergence table's modes
 
 
 def peak_memory_mb() -> float:
@@ -56,8 +59,7 @@ def labels(modes) -> list[str]:
     return out
 
 
-def timing(comm: MPI.Comm, overrides: list[str], log) -> None:
-    case = JointCase.from_dict(read_case("scaled", overrides))
+def timing(comm: MPI.Comm, case: JointCase, log: Callable[[str], None]) -> None:
     t0, c0 = time.perf_counter(), time.process_time()
     modes = joint_modes(comm, case, log)
     total, cpu = time.perf_counter() - t0, time.process_time() - c0
@@ -75,10 +77,11 @@ def timing(comm: MPI.Comm, overrides: list[str], log) -> None:
     log("first frequencies [Hz]: " + " ".join(f"{f:.2f}" for f in modes.result.frequencies_hz))
 
 
-def convergence(comm: MPI.Comm, overrides: list[str], log) -> None:
+def convergence(
+    comm: MPI.Comm, cases: list[tuple[str, JointCase]], log: Callable[[str], None]
+) -> None:
     rows = []
-    for label, extra in REFINEMENTS:
-        case = JointCase.from_dict(read_case("scaled", overrides + extra + ["modal.n_modes=10"]))
+    for label, case in cases:
         t0 = time.perf_counter()
         modes = joint_modes(comm, case)
         names = labels(modes)
@@ -119,15 +122,20 @@ def main(argv: list[str] | None = None) -> int:
     )
     args = parser.parse_args(argv)
     comm = MPI.COMM_WORLD
-
-    def log(message: str) -> None:
-        if comm.rank == 0:
-            print(message, flush=True)
-
+    try:  # every case checked before the first is computed
+        if args.convergence:
+            cases = [
+                (label, JointCase.from_dict(read_case("scaled", args.set + extra + TEN_MODES)))
+                for label, extra in REFINEMENTS
+            ]
+        else:
+            case = JointCase.from_dict(read_case("scaled", args.set))
+    except (ValueError, FileNotFoundError) as err:
+        return cli.fail(comm, str(err))
     if args.convergence:
-        convergence(comm, args.set, log)
+        convergence(comm, cases, cli.say(comm))
     else:
-        timing(comm, args.set, log)
+        timing(comm, case, cli.say(comm))
     return 0
 
 

@@ -55,8 +55,11 @@ def main(argv=None) -> int:
     a = p.parse_args(argv)
     comm = MPI.COMM_WORLD
     say = cli.say(comm)
-    own = InstallationCase.from_dict(read_case(a.case, a.set))
-    vibration = InstallationCase.from_dict(read_case(a.case, a.set + ['self_weight.scheme=""']))
+    try:
+        own = InstallationCase.from_dict(read_case(a.case, a.set))
+        vibration = InstallationCase.from_dict(read_case(a.case, a.set + ['self_weight.scheme=""']))
+    except (ValueError, FileNotFoundError) as err:
+        return cli.fail(comm, str(err))
     results = {}
     for name, case in (("self-weight scheme", own), ("vibration scheme", vibration)):
         r = results[name] = self_weight(comm, case)
