@@ -7,7 +7,7 @@ beside the file first) takes that case and lays the file's own tables over it (a
 merge of tables: the file wins key by key; arrays, also arrays of tables, are replaced
 whole). Parents may extend further; an unknown parent or a cycle is an error.
 
-Overrides use dotted keys, ``--set friction.mu_s=0.3 --set mesh.n_circumferential=24``;
+Overrides use dotted keys, ``--set friction.mu_s=0.6 --set mesh.n_circumferential=24``;
 the value is read as TOML (numbers, booleans, strings, arrays), and a bare word as a
 string. Each table is turned into a typed object by its owner's ``from_dict`` through
 :func:`construct`, which names the table and key of any problem.
