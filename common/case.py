@@ -1,7 +1,10 @@
 """Case files: a TOML file plus command-line overrides, checked before any computation.
 
-A case is a nested dict of TOML tables ([geometry.mp], [material], [mesh],
-[friction], [damping], [loading], [[schedule]], ...). A case file may start from
+A case is a nested dict of TOML tables: [geometry.mp], [geometry.tp], [material], [mesh],
+[contact], [friction], [damping], [time], [self_weight], [vibration], [static_force],
+[output], [modal], [imperfections.mp], [imperfections.tp] and [[schedule]] (the tables an
+installation case accepts, ``solver.installation.case.KNOWN_TABLES``; a modal case reads
+the geometry, [material], [mesh] and [modal]). A case file may start from
 another one: ``extends = "coarse"`` (a preset name in ``cases/``, or a path, looked up
 beside the file first) takes that case and lays the file's own tables over it (a deep
 merge of tables: the file wins key by key; arrays, also arrays of tables, are replaced
