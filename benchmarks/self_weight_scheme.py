@@ -8,8 +8,15 @@ iterations, the settlement at the end of the ramp and of the hold, and the stick
 (count and the settlement of each, ``solver.post.report.slip_episodes``), then the relative
 differences.
 
-    mpirun -n 2 python benchmarks/self_weight_scheme.py                 # the default case
-    mpirun -n 2 python benchmarks/self_weight_scheme.py --case coarse
+    mpirun -n 2 python benchmarks/self_weight_scheme.py --case CASE --set 'self_weight.scheme="S"'
+
+The first run takes the case's [self_weight] scheme, which is the [time] scheme unless the
+case sets one (the cases in cases/ do not), so the scheme to compare is given with ``--set``.
+The comparison of docs/dynamics.md (generalised-alpha rho_inf = 0 against the vibration
+scheme, generalised-alpha rho_inf = 0.7, on the coarse joint):
+
+    mpirun -n 2 python benchmarks/self_weight_scheme.py --case coarse \\
+        --set 'self_weight.scheme="generalised-alpha"' --set self_weight.rho_inf=0
 """
 
 import argparse

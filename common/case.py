@@ -1,13 +1,16 @@
 """Case files: a TOML file plus command-line overrides, checked before any computation.
 
-A case is a nested dict of TOML tables ([geometry.mp], [material], [mesh],
-[friction], [damping], [loading], [[schedule]], ...). A case file may start from
+A case is a nested dict of TOML tables: [geometry.mp], [geometry.tp], [material], [mesh],
+[contact], [friction], [damping], [time], [self_weight], [vibration], [static_force],
+[output], [modal], [imperfections.mp], [imperfections.tp] and [[schedule]] (the tables an
+installation case accepts, ``solver.installation.case.KNOWN_TABLES``; a modal case reads
+the geometry, [material], [mesh] and [modal]). A case file may start from
 another one: ``extends = "coarse"`` (a preset name in ``cases/``, or a path, looked up
 beside the file first) takes that case and lays the file's own tables over it (a deep
 merge of tables: the file wins key by key; arrays, also arrays of tables, are replaced
 whole). Parents may extend further; an unknown parent or a cycle is an error.
 
-Overrides use dotted keys, ``--set friction.mu_s=0.3 --set mesh.n_circumferential=24``;
+Overrides use dotted keys, ``--set friction.mu_s=0.6 --set mesh.n_circumferential=24``;
 the value is read as TOML (numbers, booleans, strings, arrays), and a bare word as a
 string. Each table is turned into a typed object by its owner's ``from_dict`` through
 :func:`construct`, which names the table and key of any problem.

@@ -13,7 +13,7 @@ Without options: cases/dismount.toml (the default joint of cases/scaled.toml, 48
 whose ten lowest frequencies are within 3 % of the converged ones: docs/install.md
 "Discretisation"), short stages. After the self-weight stage alone this joint is held by a
 contact normal force of about 21 kN, so its rigid Coulomb pull-out force
-N (mu cos(alpha) - sin(alpha)) is 7.86-9.92 kN (printed; docs/scenarios.md, S5): the default
+N (mu cos(alpha) - sin(alpha)) is 7.93-10.01 kN (printed; docs/scenarios.md, S5): the default
 pull of 6 kN lies below it, a pull in docs/physics.md §3's rig range (10-40 kN, e.g. --pull
 20e3) frees this joint without vibration. --quick: --case dismount_quick (the tiny
 joint with the landing contact settings) and very short stages (a smoke run: the TP is still

@@ -1,5 +1,5 @@
 """A vibration stage of an installation run continued (the atlas's S2 probe, docs/physics.md
-§5.2 "each event stabilises"): from the state the run kept after the stage (``[output]
+§5.2 "each event comes to rest"): from the state the run kept after the stage (``[output]
 stage_states``), the same excitation for another stage duration, at the step of the run's plan
 of that stage. The forcing is the run's automatic schedule (``[vibration]``) with the stage
 repeated, so its phase runs on from where the stage left it. Kept as ``run.json`` in its folder

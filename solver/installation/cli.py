@@ -2,7 +2,7 @@
 
 Every demo reads a case: ``--case NAME`` (a preset in ``cases/`` or a TOML file; each demo has
 its default case), with ``--set table.key=value`` overrides and, for the installation-type
-demos, named shorthands for common keys (``--mu-s 0.3`` is ``--set friction.mu_s=0.3``).
+demos, named shorthands for common keys (``--mu-s 0.6`` is ``--set friction.mu_s=0.6``).
 ``--quick`` is ``--case`` of the demo's quick preset (a smoke run, what CTest runs); giving
 another ``--case`` with it is an error. Later wins: the case file (with the files it extends),
 the named options, ``--set``. ``--output`` is the output folder.
@@ -86,7 +86,7 @@ def case_parser(
         action="append",
         default=[],
         metavar="TABLE.KEY=VALUE",
-        help="override a case entry, e.g. friction.mu_s=0.3 (repeatable)",
+        help="override a case entry, e.g. friction.mu_s=0.6 (repeatable)",
     )
     p.add_argument(
         "--quick",

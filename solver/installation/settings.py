@@ -118,7 +118,9 @@ class DampingSettings:
 class TimeSettings:
     """``[time]``: scheme and step sizes of the dynamic stages."""
 
-    scheme: str = "generalised-alpha"  #: newmark | generalised-alpha | quasi-static
+    #: newmark | generalised-alpha (a case with quasi-static is refused when it is checked:
+    #: the vibration stages need inertia, ``planning.check_time_scheme``)
+    scheme: str = "generalised-alpha"
     rho_inf: float = 0.8  #: generalised-alpha spectral radius [-]
     steps_per_period: int = 24  #: vibration stages: steps per period of the stage frequency
     dt_min_fraction: float = 1 / 64  #: smallest cut step as a fraction of the nominal step

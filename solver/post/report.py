@@ -71,7 +71,9 @@ STAGE_COLUMNS = [
     "reason",
 ]
 
-LATE = 0.2  #: docs/physics.md §5.2 "each event stabilises": the last LATE of a stage ...
+#: docs/physics.md §5.2 "each event comes to rest", judged by the criterion of
+#: docs/scenarios.md, S2: the last LATE of a stage ...
+LATE = 0.2
 LATE_SHARE = 0.05  #: ... adds less than LATE_SHARE of the stage's gain [-]
 
 
@@ -189,20 +191,22 @@ def format_stage(s: dict) -> str:
     return line
 
 
-SELECTIVE = (
-    5.0  #: docs/physics.md §5.2 criterion: a modal stage settles >= SELECTIVE x the control [-]
-)
+#: frequency-driven settlement (docs/physics.md §5.2), judged by the criterion of
+#: docs/scenarios.md, S2: a modal stage settles >= SELECTIVE x as fast as the control [-]
+SELECTIVE = 5.0
 
 
 def stabilised(gained_mm: float, late_gained_mm: float) -> bool:
-    """docs/physics.md §5.2: a stage that settled (gain > 0) whose last ``LATE`` added less than
+    """A stage whose event came to rest (docs/physics.md §5.2), by the criterion of
+    docs/scenarios.md, S2: it settled (gain > 0) and its last ``LATE`` added less than
     ``LATE_SHARE`` of its gain."""
     return gained_mm > 0 and abs(late_gained_mm) < LATE_SHARE * gained_mm
 
 
 def format_stabilisation(stages: list[dict]) -> list[str]:
-    """Summary lines: which vibration stages ended at rest (docs/physics.md §5.2), with the share of their
-    gain in their last 20 %; none without vibration stages."""
+    """Summary lines: which vibration stages ended at rest (docs/physics.md §5.2; ``stabilised``,
+    the criterion of docs/scenarios.md, S2), with the share of their gain in their last 20 %;
+    none without vibration stages."""
     groups: dict[str, list[str]] = {"stabilised": [], "still settling": [], "no settlement": []}
     for s in stages:
         if not s["frequency_Hz"] or not s["steps"]:
@@ -221,8 +225,8 @@ def format_stabilisation(stages: list[dict]) -> list[str]:
     if not any(groups.values()):
         return []
     return [
-        f"settlement events (docs/physics.md §5.2: stabilised when the last {100 * LATE:g} % of the stage adds "
-        f"< {100 * LATE_SHARE:g} % of its gain):",
+        f"settlement events (docs/physics.md §5.2; docs/scenarios.md, S2: stabilised when the last "
+        f"{100 * LATE:g} % of the stage adds < {100 * LATE_SHARE:g} % of its gain):",
         *(f"  {key}: {', '.join(items)}" for key, items in groups.items() if items),
     ]
 
@@ -247,12 +251,12 @@ def frequency_selectivity(stages: list[dict], excitations) -> list[dict[str, flo
     ``stages`` are the stage summaries (stage 0 the self-weight, stage k >= 1 excited by
     ``excitations[k - 1]``). The sustained rate is the gain over the second half of a stage
     over its duration [mm/s]: the first half also holds the event in which the joint settles
-    to the depth that holds the new excitation (docs/physics.md §5.2: each event stabilises), which at a
-    non-modal frequency is all it settles, and the tail of the previous stage. The rate over
-    the whole stage is given too. One row per modal stage: frequency_Hz, rate_mm_s,
-    stage_rate_mm_s, control_Hz, control_rate_mm_s, control_stage_rate_mm_s, ratio (sustained;
-    when the control did not settle: inf if the modal stage did, else 0), stage_ratio; empty
-    without a control.
+    to the depth that holds the new excitation (docs/physics.md §5.2: each event comes to
+    rest), which at a non-modal frequency is all it settles, and the tail of the previous
+    stage. The rate over the whole stage is given too. One row per modal stage: frequency_Hz,
+    rate_mm_s, stage_rate_mm_s, control_Hz, control_rate_mm_s, control_stage_rate_mm_s, ratio
+    (sustained; when the control did not settle: inf if the modal stage did, else 0),
+    stage_ratio; empty without a control.
     """
     roles = {k + 1: e for k, e in enumerate(excitations)}
 
@@ -296,9 +300,9 @@ def format_selectivity(rows: list[dict[str, float]]) -> list[str]:
         return []
     shown = all(r["ratio"] >= SELECTIVE for r in rows)
     return [
-        f"frequency selectivity (docs/physics.md §5.2: modal stages settle >= {SELECTIVE:g} x faster than the "
-        f"control, over the second half of each stage): {'shown' if shown else 'NOT shown'} by "
-        "this run",
+        f"frequency selectivity (docs/physics.md §5.2; docs/scenarios.md, S2: modal stages settle "
+        f">= {SELECTIVE:g} x faster than the control, over the second half of each stage): "
+        f"{'shown' if shown else 'NOT shown'} by this run",
         f"  control {rows[0]['control_Hz']:8.2f} Hz: {rows[0]['control_rate_mm_s']:+.4f} mm/s "
         f"(whole stage {rows[0]['control_stage_rate_mm_s']:+.4f} mm/s)",
         *(

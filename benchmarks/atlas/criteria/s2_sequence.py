@@ -74,8 +74,8 @@ def s2_sequence(ctx: Context) -> Outcome:
     planned = len(manifest["plans"]) - 1
     rows.append(
         Row(
-            "stages of the sequence in the run (docs/physics.md §3 asks for the ten best-ranked "
-            "modes: `--full`)",
+            "stages of the sequence in the run (S2's ten best-ranked modes: `--full`; "
+            "docs/physics.md §3 drives each natural frequency in turn)",
             f"{len(stages)} of {planned} vibration stages to t = {manifest['time_s']:.2f} s; "
             f"modal stages at the modes of rank "
             f"{', '.join(str(e.rank) for e in excitations if e.role == 'modal')}",
