@@ -1,7 +1,7 @@
 """Case files: a TOML file plus command-line overrides, checked before any computation.
 
 A case is a nested dict of TOML tables: [geometry.mp], [geometry.tp], [material], [mesh],
-[contact], [friction], [damping], [time], [self_weight], [vibration], [static_force],
+[contact], [friction], [damping], [time], [self_weight], [vibration], [static_force], [dismount],
 [output], [modal], [imperfections.mp], [imperfections.tp] and [[schedule]] (the tables an
 installation case accepts, ``solver.installation.case.KNOWN_TABLES``; a modal case reads
 the geometry, [material], [mesh] and [modal]). A case file may start from

@@ -11,14 +11,16 @@ modes.csv, frequencies.csv, plots, summary.txt).
 
 Without options: cases/dismount.toml (the default joint of cases/scaled.toml, 48 around, P2,
 whose ten lowest frequencies are within 3 % of the converged ones: docs/install.md
-"Discretisation"), short stages. After the self-weight stage alone this joint is held by a
-contact normal force of about 21 kN, so its rigid Coulomb pull-out force
-N (mu cos(alpha) - sin(alpha)) is 7.93-10.01 kN (printed; docs/scenarios.md, S5): the default
-pull of 6 kN lies below it, a pull in docs/physics.md §3's rig range (10-40 kN, e.g. --pull
-20e3) frees this joint without vibration. --quick: --case dismount_quick (the tiny
-joint with the landing contact settings) and very short stages (a smoke run: the TP is still
-sliding at the end of its 12 ms self-weight ramp, so little normal force has built up and the
-pull alone separates it).
+"Discretisation") and the sequence of the case's [dismount] table (``DismountPlan``'s
+defaults, the option values below; each option sets its entry, --set dismount.KEY=VALUE
+too). After the self-weight stage alone this joint is held by a contact normal force of about
+21 kN, so its rigid Coulomb pull-out force N (mu cos(alpha) - sin(alpha)) is 7.93-10.01 kN
+(printed; docs/scenarios.md, S5): the default pull of 6 kN lies below it, a pull in
+docs/physics.md §3's rig range (10-40 kN, e.g. --pull 20e3) frees this joint without
+vibration. --quick: --case dismount_quick (the tiny joint with the landing contact settings)
+and the very short stages of its [dismount] table (a smoke run: the TP is still sliding at the
+end of its 12 ms self-weight ramp, so little normal force has built up and the pull alone
+separates it).
 
 Usage: mpirun -n 2 python demos/dismount.py [--pull 6e3] [--pull-ramp 0.05] [--pull-hold 0.05]
        [--install-stages 0] [--n-frequencies 2] [--stage-duration 0.03] [--amplitude 3600]
@@ -35,17 +37,26 @@ from mpi4py import MPI
 from solver.installation import cli
 from solver.installation.dismount import (
     DISMOUNT_COLUMNS,
-    DismountPlan,
     dismount_case,
     dismount_table,
     pull_out_force,
+    read_plan,
 )
 from solver.post.csv import write_csv
 from solver.post.plots import plot_dismount
 
 DEFAULT_CASE = "dismount"
 QUICK_CASE = "dismount_quick"
-QUICK_PLAN = {"ramp_s": 0.004, "hold_s": 0.012, "stage_duration_s": 0.004, "n_frequencies": 1}
+#: the demo's options and the [dismount] entries they set (--set dismount.KEY=VALUE wins)
+PLAN_OPTIONS = {
+    "pull": "pull_N",
+    "pull_ramp": "ramp_s",
+    "pull_hold": "hold_s",
+    "install_stages": "n_install",
+    "n_frequencies": "n_frequencies",
+    "stage_duration": "stage_duration_s",
+    "amplitude": "amplitude_N",
+}
 
 
 def main(argv: list[str] | None = None) -> int:
@@ -53,7 +64,6 @@ def main(argv: list[str] | None = None) -> int:
     p.add_argument(
         "--pull",
         type=float,
-        default=6e3,
         help="upward pulling force [N] (6 kN; docs/physics.md §3 rig: 10-40 kN)",
     )
     p.add_argument(
@@ -63,33 +73,27 @@ def main(argv: list[str] | None = None) -> int:
     p.add_argument(
         "--install-stages",
         type=int,
-        default=0,
         help="vibration stages at the ranked frequencies before pulling (0)",
     )
     p.add_argument("--n-frequencies", type=int, help="pull + vibration stages at ranked 1..n (2)")
     p.add_argument("--stage-duration", type=float, help="each vibration stage [s] (0.03)")
-    p.add_argument("--amplitude", type=float, default=3600.0, help="vibration force amplitude [N]")
+    p.add_argument("--amplitude", type=float, help="vibration force amplitude [N] (3600)")
     args = p.parse_args(argv)
     comm = MPI.COMM_WORLD
     log = cli.say(comm)
-    given = {
-        "ramp_s": args.pull_ramp,
-        "hold_s": args.pull_hold,
-        "stage_duration_s": args.stage_duration,
-        "n_frequencies": args.n_frequencies,
-    }
-    base = QUICK_PLAN if args.quick else {"stage_duration_s": 0.03, "n_frequencies": 2}
+    given = [
+        f"dismount.{key}={getattr(args, option)}"
+        for option, key in PLAN_OPTIONS.items()
+        if getattr(args, option) is not None
+    ]
     try:
-        plan = DismountPlan(
-            pull_N=args.pull,
-            n_install=args.install_stages,
-            amplitude_N=args.amplitude,
-            **{**base, **{k: v for k, v in given.items() if v is not None}},
+        case = cli.load_case(
+            args, before=given, edit=lambda data: dismount_case(data, read_plan(data))
         )
-        case = cli.load_case(args, edit=lambda data: dismount_case(data, plan))
         cli.prepare_output(comm, args.output)
     except ValueError as e:
         return cli.fail(comm, str(e))
+    plan = case.dismount
     log(
         f"dismount: {-case.self_weight.force_N / 1e3:.1f} kN self-weight, {plan.n_install} "
         f"installation stage(s), pull {plan.pull_N / 1e3:.1f} kN up (ramp {plan.ramp_s} s, "

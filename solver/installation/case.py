@@ -18,6 +18,7 @@ from solver.contact import FrictionLaw
 from solver.dynamics.loads import Schedule
 from solver.dynamics.schemes import Scheme, scheme_from_name
 from solver.dynamics.time_loop import check_event_step
+from solver.installation.dismount import DismountPlan
 from solver.installation.planning import check_time_scheme
 from solver.installation.settings import (
     ContactSettings,
@@ -33,6 +34,7 @@ from solver.installation.settings import (
 
 SECTIONS = {
     "contact": ContactSettings,
+    "dismount": DismountPlan,
     "damping": DampingSettings,
     "time": TimeSettings,
     "self_weight": SelfWeightSettings,
@@ -68,6 +70,7 @@ class InstallationCase:
     vibration: VibrationSettings
     output: OutputSettings
     static_force: StaticForceSettings
+    dismount: DismountPlan  #: the sequence demos/dismount.py writes into the case
     schedule: Schedule | None  #: explicit [[schedule]] (start time 0: shifted after self-weight)
     source: str = "case"
     imperfections: dict[str, ImperfectionSettings] = field(default_factory=dict)

@@ -1,7 +1,8 @@
 """Dismount of an installed joint (docs/physics.md §3, 5.5): a pulling axial force alone, then pulling plus
 vibration at the ranked natural frequencies of the settled joint.
 
-:func:`dismount_case` writes the sequence into an installation case (``solver.installation``):
+:func:`read_plan` takes the sequence from a case's ``[dismount]`` table (:class:`DismountPlan`),
+:func:`dismount_case` writes it into the installation case (``solver.installation``):
 after the self-weight stage, optionally ``n_install`` installation stages at the ranked
 frequencies with the self-weight force held, then the static axial force is ramped from the
 self-weight force (down) to the pull ``pull_N`` (up, > 0) over ``ramp_s`` and held
@@ -28,6 +29,7 @@ from typing import Any
 
 import numpy as np
 
+from common.case import construct
 from solver.installation.settings import SelfWeightSettings, VibrationSettings
 
 DISMOUNT_COLUMNS = [
@@ -52,14 +54,15 @@ SEPARATION_FRACTION = 0.01
 
 @dataclass(frozen=True)
 class DismountPlan:
-    """The dismount sequence after the self-weight stage (SI units)."""
+    """``[dismount]``: the dismount sequence after the self-weight stage (SI units; the defaults
+    are ``demos/dismount.py``'s)."""
 
     pull_N: float = 6e3  #: pulling (upward) static force [N] (docs/physics.md §3 rig: 10-40 kN)
     ramp_s: float = 0.05  #: ramp from the self-weight force to the pull [s]
     hold_s: float = 0.05  #: pull alone, held [s]
     n_install: int = 0  #: installation stages (ranked frequencies, self-weight held) before
-    n_frequencies: int = 1  #: pull + vibration stages at 'ranked 1..n'
-    stage_duration_s: float = 0.1  #: each vibration stage [s]
+    n_frequencies: int = 2  #: pull + vibration stages at 'ranked 1..n'
+    stage_duration_s: float = 0.03  #: each vibration stage [s]
     amplitude_N: float = 3600.0  #: vibration force amplitude [N]
 
     def __post_init__(self) -> None:
@@ -84,6 +87,12 @@ class DismountPlan:
             + ["pull ramp", "pull alone"]
             + ["pull + vibration"] * self.n_frequencies
         )
+
+
+def read_plan(case: dict[str, Any]) -> DismountPlan:
+    """The plan of a case dict's ``[dismount]`` table (the defaults of :class:`DismountPlan`
+    where absent); ValueError naming the table on a bad entry."""
+    return construct(DismountPlan, dict(case.get("dismount", {})), "dismount")
 
 
 def dismount_case(case: dict[str, Any], plan: DismountPlan) -> None:

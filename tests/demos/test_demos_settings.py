@@ -206,6 +206,25 @@ def test_dismount_case_sequence():
         DismountPlan(n_install=-1)
 
 
+def test_dismount_plan_is_the_case_table():
+    """[dismount] holds the demo's sequence: DismountPlan's defaults where absent, checked with
+    the case before any computation."""
+    from solver.installation.dismount import DismountPlan, read_plan
+
+    assert _case().dismount == DismountPlan() == read_plan(read_case("dismount"))
+    quick = read_case("dismount_quick", ["dismount.pull_N=2e4"])
+    plan = read_plan(quick)
+    assert (plan.pull_N, plan.ramp_s, plan.stage_duration_s, plan.n_frequencies) == (
+        2e4,
+        0.004,
+        0.004,
+        1,
+    )
+    assert InstallationCase.from_dict(quick).dismount == plan
+    with pytest.raises(ValueError, match=r"\[dismount\] has unknown key"):
+        _case("dismount.pull=1e4")
+
+
 def test_dismount_table_motion_and_separation():
     """Synthetic history: the TP goes up 0.5 mm in the pull stage but keeps contact, then
     rises 3 mm with zero normal force."""
