@@ -24,7 +24,7 @@ from common import backend  # noqa: F401
 
 from mpi4py import MPI
 
-from benchmarks.phase_timer import PhaseTimer
+from benchmarks.phase_timer import PhaseTimer, peak_memory_mb
 from common.case import read_case
 from common.timing import recording
 from solver.installation.case import InstallationCase
@@ -95,6 +95,8 @@ class StageProfile:
                 f"{r['step_cuts']} | {r['solve_ms']:.1f} | {r['ratio']:.1f} |"
             )
         self.say(f"| **total** | **{total_s:.1f}** ({total_s / 60:.1f} min) | | | | | | | | | |")
+        memory = self.comm.gather(peak_memory_mb())
+        self.say(f"peak resident memory per rank: {', '.join(f'{m:.0f}' for m in memory or [])} MB")
 
 
 def main(argv=None) -> int:

@@ -14,7 +14,6 @@ largest relative change against the default.
 """
 
 import argparse
-import resource
 import sys
 import time
 from collections.abc import Callable
@@ -24,6 +23,7 @@ from common import backend  # noqa: F401  (before dolfinx)
 import numpy as np
 from mpi4py import MPI
 
+from benchmarks.phase_timer import peak_memory_mb
 from common.case import read_case
 from geometry import tags
 from solver.modal.classify import classify
@@ -41,10 +41,6 @@ REFINEMENTS = [  # (label, overrides) -- the first one is the default discretisa
     ("48 around, p=3", ["modal.n_circumferential=48"]),
 ]
 TEN_MODES = ["modal.n_modes=10"]  #: the convergence table's modes
-
-
-def peak_memory_mb() -> float:
-    return resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024.0
 
 
 def labels(modes) -> list[str]:

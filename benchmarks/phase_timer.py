@@ -30,6 +30,8 @@ Times are this rank's; ``report`` prints rank 0's, with the number of calls of e
 Jacobian, Woodbury updates of the kept factors and FGMRES iterations.
 """
 
+import resource
+
 from common.timing import PhaseTimes
 
 PHASES = [
@@ -46,6 +48,11 @@ PHASES = [
     "bulk vectors",
     "other",
 ]
+
+
+def peak_memory_mb() -> float:
+    """This process's peak resident memory [MB] so far (Linux ru_maxrss)."""
+    return resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024.0
 
 
 class PhaseTimer(PhaseTimes):
