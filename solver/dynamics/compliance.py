@@ -103,15 +103,19 @@ class ContactCompliance:
     The point set and the band only grow (:meth:`extend`); A is symmetric (the Newmark operator
     of a symmetric structure and the linear Nitsche part), so that new points and band dofs
     need the solutions of their own columns only: A^-1 F_N^T W, A^-1 E_N^T and A^-1 I_bN.
+    The distributed factors of A serve the solves of the Newton iterations (:meth:`solve`); on
+    several ranks the blocks' columns are solved with a sequential copy of A and its factors on
+    every rank (:meth:`_column_solver`), which costs a second set of factors per rank.
 
     Args:
         A: the operator on the zone (zone numbering: the zone's dofs rank by rank), symmetric.
         zone_dofs: the zone's global dofs (of the full space) in zone order, on every rank.
         lu_solver: PETSc factorisation package; PETSc options under the prefix ``compliance_``
-            apply to the factorisation (e.g. ``-compliance_mat_mumps_icntl_7 5``).
-        width: right-hand sides per multiple-right-hand-side solve (fewer when fewer columns are
-            asked for, except with SuperLU_DIST, whose repeated solves need the same width);
-            MUMPS takes them sparse.
+            apply to the distributed factorisation (e.g. ``-compliance_mat_mumps_icntl_7 5``),
+            those under ``compliance_columns_`` to the ranks' sequential copies.
+        width: right-hand sides per multiple-right-hand-side solve (fewer when a rank's share of
+            the columns is smaller, except with SuperLU_DIST, whose repeated solves need the
+            same width); MUMPS takes them sparse.
     """
 
     def __init__(self, A: PETSc.Mat, zone_dofs: npt.NDArray, lu_solver: str, width: int = 64):
@@ -262,7 +266,8 @@ class ContactCompliance:
         return self._E, self._F
 
     def _band_rows(self) -> None:
-        """This rank's zone rows of the band (local indices) and their band positions."""
+        """The band's zone rows (``_band_zone``, in band order) and this rank's of them (local
+        indices ``_band_local``, at the band positions ``_band_owned``)."""
         band_rows = self.zone_index(self.band) if len(self.band) else np.zeros(0, np.int64)
         owned = (band_rows >= self.start) & (band_rows < self.end)
         self._band_owned = np.flatnonzero(owned)
@@ -298,7 +303,6 @@ class ContactCompliance:
         and X on the band, in band order, on every rank. Each rank solves a contiguous share of
         the columns with its full copy of the factors (:meth:`_column_solver`) and the shares
         are gathered."""
-        E, F = (_full_copy(mat) for mat in self._matrices())
         share = np.array_split(np.arange(n), self.comm.size)[self.comm.rank]
         first = share[0] if len(share) else 0
         if B is not None:  # B's rows are the columns to solve for, its columns zone dofs
@@ -327,9 +331,12 @@ class ContactCompliance:
 
         A, factor = self._column_solver()
         width = self.width if self._fixed_width else max(1, min(self.width, len(share)))
-        solve_columns(factor, A, len(share), entries, consume, width, self._sparse)
-        for mat in (E, F):
-            mat.destroy()
+        E, F = (_full_copy(mat) for mat in self._matrices())
+        try:
+            solve_columns(factor, A, len(share), entries, consume, width, self._sparse)
+        finally:
+            for mat in (E, F):
+                mat.destroy()
 
         def joined(out: list[npt.NDArray], rows: int) -> npt.NDArray:
             return _gather_columns(self.comm, np.hstack(out) if out else np.zeros((rows, 0)), n)
@@ -347,9 +354,20 @@ class ContactCompliance:
             return self.A, self.lu.getPC().getFactorMatrix()
         if self._copy is None:
             A = _full_copy(self.A)
-            self._copy = direct_solver(MPI.COMM_SELF, A, self._package, prefix="compliance_")
-            self._copy.setUp()
+            copy = direct_solver(MPI.COMM_SELF, A, self._package, prefix="compliance_columns_")
             A.destroy()
+            try:
+                copy.setUp()
+                factorised = True
+            except PETSc.Error:
+                factorised = False
+            if not self.comm.allreduce(factorised, op=MPI.LAND):  # fail on every rank alike
+                copy.destroy()
+                raise RuntimeError(
+                    "the sequential factorisation of the contact zone's operator failed on some "
+                    "rank (memory?); run on fewer ranks per node"
+                )
+            self._copy = copy
         return self._copy.getOperators()[0], self._copy.getPC().getFactorMatrix()
 
     # -- per pairing ----------------------------------------------------------------------------
