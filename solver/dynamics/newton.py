@@ -447,22 +447,13 @@ def solve_contact_problem(
     contact: ContactModel,
     u: dolfinx.fem.Function,
     bcs: list[dolfinx.fem.DirichletBC],
-    solver: ContactNewtonSolver | None = None,
     **options,
 ) -> NewtonResult:
-    """Solve A u + r_c(u) = b by generalized Newton (see ContactNewtonSolver for ``options``).
-
-    Pass a ``solver`` created once for the same A (and bcs) to keep its factorisation
-    across load/time steps; otherwise a new one is made and destroyed. Returns a
-    NewtonResult; ``converged=False`` (with ``message``) lets the caller cut the step.
-    """
-    own = solver is None
-    if own:
-        solver = ContactNewtonSolver(A, bcs, **options)
-    elif options:
-        raise ValueError("pass options either to ContactNewtonSolver or here, not both")
+    """Solve A u + r_c(u) = b once by generalized Newton with a solver made for it (see
+    ContactNewtonSolver for ``options``); ``converged=False`` (with ``message``) lets the
+    caller cut the step."""
+    solver = ContactNewtonSolver(A, bcs, **options)
     try:
         return solver.solve(b, contact, u)
     finally:
-        if own:
-            solver.destroy()
+        solver.destroy()
