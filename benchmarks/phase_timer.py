@@ -16,7 +16,9 @@ record into (``with recording(timer): ...``) and prints what it holds. The phase
     linear solves      the zone Newton's corrections without factorisation and triangular
                        solves (GMRES, products with the interface matrices)
     compliance         ContactCompliance.extend (the columns A'^-1 [F^T W, E^T, I_b] of new
-                       contact points and master dofs) and ContactCompliance.matrix (G per pairing)
+                       contact points and master dofs, on several ranks with the sequential
+                       factorisation of each rank's copy of A' at a stage's first extension) and
+                       ContactCompliance.matrix (G per pairing)
     tractions          solve_tractions: the semismooth Newton of the contact points' tractions
     condensation       solver.dynamics.condensation.BulkCondensation: building and updating it (once
                        per step size), the condensed load and the recovery of the bulk (one bulk solve
