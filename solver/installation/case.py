@@ -181,9 +181,11 @@ class InstallationCase:
 
     def fingerprint(self) -> dict[str, Any]:
         """Dotted key -> value of everything that decides the computed result: the resolved case
-        without the case file's name, the output-only keys (``OUTPUT_ONLY``) and the imperfection
+        without the case file's name, the tables read after the installation
+        (``AFTER_INSTALLATION``), the output-only keys (``OUTPUT_ONLY``) and the imperfection
         files' names, whose content counts instead (``imperfections.<part>.file_sha256``)."""
-        flat = flatten({k: v for k, v in self.describe().items() if k != "source"})
+        skipped = ("source", *AFTER_INSTALLATION)
+        flat = flatten({k: v for k, v in self.describe().items() if k not in skipped})
         for key in OUTPUT_ONLY:
             flat.pop(key)
         case_dir = Path(self.source).parent
@@ -199,6 +201,9 @@ class InstallationCase:
 
 #: keys that change only what a run writes, not what it computes: a resumed run may differ in them
 OUTPUT_ONLY = ("output.paraview", "output.plots")
+#: tables that the installation run does not read (the dismount sequence after it): not in the
+#: fingerprint, so that an installed state serves any dismount plan
+AFTER_INSTALLATION = ("dismount",)
 
 
 def flatten(data: Any, prefix: str = "") -> dict[str, Any]:

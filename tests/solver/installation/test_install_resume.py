@@ -1,6 +1,7 @@
 """--resume continues only the case that wrote the checkpoint: a case that would compute
 something else (friction, an imperfection file's content, ...) is refused before anything is
-computed, with exit code 2 and the dotted keys that differ; output-only keys may differ."""
+computed, with exit code 2 and the dotted keys that differ; output-only keys and the dismount
+plan (read after the installation) may differ."""
 
 import json
 import math
@@ -111,7 +112,8 @@ def test_another_preset_and_a_changed_imperfection_file_are_refused(
 
 
 def test_output_only_changes_resume(tiny_case, demo_main, shared_tmp):
-    """A run killed after its first checkpoint resumes with other ParaView/picture settings."""
+    """A run killed after its first checkpoint resumes with other ParaView/picture settings and
+    another dismount plan."""
     comm = MPI.COMM_WORLD
     killed = Installation(comm, tiny_case(*SHORT), shared_tmp, progress=False)
     assert killed.run(stop_after_checkpoints=1) == {}
@@ -120,6 +122,8 @@ def test_output_only_changes_resume(tiny_case, demo_main, shared_tmp):
         "output.paraview=false",
         "--set",
         "output.plots=true",
+        "--set",
+        "dismount.pull_N=7000.0",
     ]
     code = demo_main("install")(
         ["--case", "tiny", *options, "--resume", "--output", str(shared_tmp), "--no-progress"]
