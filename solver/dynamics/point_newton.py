@@ -123,7 +123,7 @@ class PointNewtonSolver:
         self._G: npt.NDArray | None = None  # the inner problem's G and the master parts it used
         self._G_master: tuple[npt.NDArray, npt.NDArray] | None = None
         #: the inner problem's linear solves; its factors are kept while the points are the same
-        self.jacobian = TractionJacobian()
+        self.jacobian = TractionJacobian(self._comm)
         self._last_y: npt.NDArray | None = None  # the last inner solution, while its points stay
         self._relaxation: CoefficientRelaxation | None = None
         self.pairing_rtol, self.slow_contraction = pairing_rtol, slow_contraction

@@ -19,6 +19,11 @@ when the update was made, so FGMRES only corrects the smaller turns of the slip 
 factors are renewed when more than ``max_update`` of the points changed, or when FGMRES does not
 converge in ``max_krylov`` iterations (if it fails with new factors too, a double-precision
 solve). FGMRES (flexible) because a solve in single precision is not exactly linear.
+
+On several ranks every rank holds G and the factors; the products with G (FGMRES's operator, the
+residual's G lambda and the Newton direction's rows off the active set) are computed in
+contiguous shares of their entries, each rank its own, and joined (``solver.dynamics.shares``);
+FGMRES runs on the ranks' shares of its vectors, so that all ranks take the same iterations.
 """
 
 from collections.abc import Callable
@@ -27,9 +32,11 @@ from typing import cast
 import numpy as np
 import numpy.typing as npt
 import scipy.linalg
+from mpi4py import MPI
 from petsc4py import PETSc
 
 from common.timing import count
+from solver.dynamics.shares import Shares
 
 __all__ = ["TractionJacobian"]
 
@@ -41,26 +48,54 @@ def _dofs(points: npt.NDArray) -> npt.NDArray:
     return (3 * points[:, None] + np.arange(3)).ravel()
 
 
-class _Operator:
-    """y = x + G_aa (D x) (PETSc python matrix context); ``rows`` is G_aa^T (C order, single
-    precision: the product is a Newton direction's, its residual is checked in double)."""
+def _flush_subnormal(a: npt.NDArray) -> None:
+    """Entries below 1e-20 of a C-order matrix set to 0, in blocks of rows (small temporaries):
+    single-precision products with subnormal numbers are slow."""
+    for start in range(0, a.shape[0], 256):
+        rows = a[start : start + 256]
+        rows[np.abs(rows) < 1e-20] = 0.0
 
-    def __init__(self, rows: npt.NDArray, D: npt.NDArray):
-        self.rows, self.D = rows, D
+
+class _Workspace:
+    """Arrays kept from call to call, by name (a fresh array of tens of MB costs a page fault
+    per 4 kB page at its first touch, on every call)."""
+
+    def __init__(self):
+        self._arrays: dict[str, npt.NDArray] = {}
+
+    def get(self, name: str, shape: tuple[int, ...], dtype: type) -> npt.NDArray:
+        """An uninitialised array of this shape, in the memory of the last one of this name."""
+        size = int(np.prod(shape))
+        kept = self._arrays.get(name)
+        if kept is None or kept.size < size or kept.dtype != dtype:
+            kept = self._arrays[name] = np.empty(int(1.25 * size), dtype=dtype)
+        return kept[:size].reshape(shape)
+
+
+class _Operator:
+    """y = x + G_aa (D x) (PETSc python matrix context, vectors in ``shares``); ``rows`` is
+    G_aa^T (C order, single precision: the product is a Newton direction's, its residual is
+    checked in double)."""
+
+    def __init__(self, rows: npt.NDArray, D: npt.NDArray, shares: Shares):
+        self.rows, self.D, self.shares = rows, D, shares
 
     def mult(self, mat, x, y):
-        v = x.array_r
-        y.array[:] = v + (self.D @ v.reshape(-1, 3, 1)).ravel().astype(np.float32) @ self.rows
+        v = self.shares.gather(x.array_r)
+        Dv = (self.D @ v.reshape(-1, 3, 1)).ravel().astype(np.float32)
+        part = self.shares.part
+        y.array[:] = v[part] + Dv @ self.rows[:, part]
 
 
 class _Preconditioner:
-    """Applies a preconditioner ``solve(r) -> z`` (PETSc python preconditioner context)."""
+    """Applies a preconditioner ``solve(r) -> z`` (PETSc python preconditioner context, vectors
+    in ``shares``; every rank solves for all entries)."""
 
-    def __init__(self, solve: Solve):
-        self.solve = solve
+    def __init__(self, solve: Solve, shares: Shares):
+        self.solve, self.shares = solve, shares
 
     def apply(self, pc, x, y):
-        y.array[:] = self.solve(x.array_r)
+        y.array[:] = self.solve(self.shares.gather(x.array_r))[self.shares.part]
 
 
 class _Update:
@@ -131,6 +166,7 @@ class TractionJacobian:
     a preconditioner. Counters: ``factorizations``, ``updates`` and ``krylov_iterations``.
 
     Args:
+        comm: the ranks that share the products (each with the same G and right-hand sides).
         max_krylov: FGMRES iterations with the kept factors before they are renewed.
         rtol: relative residual of the solves, at least 1e-6: their products are in single
             precision (the Newton iteration checks its own residual in double, so this only
@@ -142,16 +178,24 @@ class TractionJacobian:
     """
 
     def __init__(
-        self, max_krylov: int = 30, rtol: float = 1e-6, max_update: float = 0.1, turn: float = 0.25
+        self,
+        comm: MPI.Comm = MPI.COMM_SELF,
+        max_krylov: int = 30,
+        rtol: float = 1e-6,
+        max_update: float = 0.1,
+        turn: float = 0.25,
     ):
         if not rtol >= 1e-6:
             raise ValueError(f"rtol must be >= 1e-6 (single-precision products), got {rtol}")
+        self.comm = comm
         self.max_krylov, self.rtol = max_krylov, rtol
         self.max_update, self.turn = max_update, turn
         self.G: npt.NDArray = np.zeros((0, 0))
         self._GT: npt.NDArray = np.zeros((0, 0))
         self._GT32: npt.NDArray = np.zeros((0, 0), dtype=np.float32)  # for the Newton directions
+        self._shares = Shares(comm, 0)  # of the entries of G's products
         self._block: tuple[bytes, npt.NDArray] | None = None  # G_aa^T of the last active set
+        self._work = _Workspace()  # of G_aa^T and of the factors
         self._lu = None
         self._lu_points = np.zeros(0, dtype=np.int64)  # a_0 and D_0 of the kept factors
         self._lu_D = np.zeros((0, 3, 3))
@@ -170,7 +214,8 @@ class TractionJacobian:
         self.G = G
         self._GT = np.ascontiguousarray(G.T)
         self._GT32 = self._GT.astype(np.float32)
-        self._GT32[np.abs(self._GT32) < 1e-20] = 0.0  # no subnormal numbers in single precision
+        _flush_subnormal(self._GT32)
+        self._shares = Shares(self.comm, G.shape[0])
         self._block = None
         self._update = None
 
@@ -181,16 +226,17 @@ class TractionJacobian:
 
     def times(self, v: npt.NDArray, active: npt.NDArray) -> npt.NDArray:
         """G v (3 np) for v zero off the ``active`` points."""
-        out = np.zeros(self._GT.shape[1])
         if not len(active):
-            return out
+            return np.zeros(self._GT.shape[1])
+        part = self._shares.part
+        out = np.zeros(part.stop - part.start)
         # run by run of consecutive points, on G^T's rows in place (a copy of them costs more)
         breaks = np.flatnonzero(np.diff(active) != 1) + 1
         starts = 3 * active[np.r_[0, breaks]]
         ends = 3 * (active[np.r_[breaks - 1, len(active) - 1]] + 1)
         for start, end in zip(starts, ends):
-            out += v[start:end] @ self._GT[start:end]
-        return out
+            out += v[start:end] @ self._GT[start:end, part]
+        return self._shares.gather(out)
 
     def direction(self, active: npt.NDArray, D: npt.NDArray, phi: npt.NDArray) -> npt.NDArray:
         """The Newton direction dy (3 np) with (I + G D) dy = -phi, D (|a|, 3, 3) the law's
@@ -200,7 +246,8 @@ class TractionJacobian:
         dy_a = self.solve(active, D, -phi[cols])
         w = np.zeros(len(phi), dtype=np.float32)  # D dy at the active points
         w[cols] = (D @ dy_a.reshape(-1, 3, 1)).ravel()
-        dy = -phi - w @ self._GT32
+        part = self._shares.part
+        dy = self._shares.gather(-phi[part] - w @ self._GT32[:, part])
         dy[cols] = dy_a
         return dy
 
@@ -209,22 +256,32 @@ class TractionJacobian:
         key = active.tobytes()
         if self._block is None or self._block[0] != key:
             cols = _dofs(active)
-            self._block = (key, self._GT32[np.ix_(cols, cols)])
+            picked = self._work.get("rows", (len(cols), self._GT32.shape[1]), np.float32)
+            np.take(self._GT32, cols, axis=0, out=picked, mode="clip")  # clip: unbuffered
+            block = self._work.get("block", (len(cols), len(cols)), np.float32)
+            self._block = (key, np.take(picked, cols, axis=1, out=block, mode="clip"))
         return self._block[1]
 
-    def _jacobian(self, active: npt.NDArray, D: npt.NDArray, rows: npt.NDArray) -> npt.NDArray:
-        """J = I + G_aa D (Fortran order) from ``rows`` = G_aa^T (C order), in their precision."""
+    def _jacobian(
+        self, active: npt.NDArray, D: npt.NDArray, rows: npt.NDArray, out: npt.NDArray | None = None
+    ) -> npt.NDArray:
+        """J = I + G_aa D (Fortran order) from ``rows`` = G_aa^T (C order), in their precision
+        (in ``out``, n x n in C order, where given)."""
         n = rows.shape[0]
         # J^T = D^T G_aa^T block row by block row; J in Fortran order is its transpose
         DT = D.transpose(0, 2, 1).astype(rows.dtype)
-        J = (DT @ rows.reshape(len(active), 3, n)).reshape(n, n).T
+        blocks = None if out is None else out.reshape(len(active), 3, n)
+        J = np.matmul(DT, rows.reshape(len(active), 3, n), out=blocks).reshape(n, n).T
         J[np.diag_indices_from(J)] += 1.0
         return J
 
     def _factorise(self, active: npt.NDArray, D: npt.NDArray) -> None:
         """Single-precision LU factors of J = I + G_aa D."""
-        J = self._jacobian(active, D, self._block_rows(active))
-        J[np.abs(J) < 1e-20] = 0.0  # no subnormal numbers in single precision: slow
+        rows = self._block_rows(active)
+        n = rows.shape[0]
+        # in the memory of the factors it replaces
+        J = self._jacobian(active, D, rows, self._work.get("factors", (n, n), np.float32))
+        _flush_subnormal(J.T)
         self._lu = scipy.linalg.lu_factor(J, overwrite_a=True, check_finite=False)
         self._lu_points, self._lu_D = active.copy(), D.copy()
         self._update = None
@@ -262,12 +319,13 @@ class TractionJacobian:
         self, active: npt.NDArray, D: npt.NDArray, r: npt.NDArray, preconditioner: Solve
     ) -> tuple[npt.NDArray, bool]:
         """FGMRES with the preconditioner: the solution and whether it converged."""
-        n = len(r)
-        comm = PETSc.COMM_SELF
-        A = PETSc.Mat().createPython((n, n), _Operator(self._block_rows(active), D), comm=comm)
-        ksp = PETSc.KSP().create(comm)
-        b = PETSc.Vec().createSeq(n, comm=comm)
-        b.array[:] = r
+        shares = Shares(self.comm, len(r))
+        size = (shares.stop - shares.start, len(r))
+        operator = _Operator(self._block_rows(active), D, shares)
+        A = PETSc.Mat().createPython((size, size), operator, comm=self.comm)
+        ksp = PETSc.KSP().create(self.comm)
+        b = PETSc.Vec().createMPI(size, comm=self.comm)
+        b.array[:] = r[shares.part]
         x = b.duplicate()
         try:
             A.setUp()
@@ -277,12 +335,12 @@ class TractionJacobian:
             ksp.setTolerances(rtol=self.rtol, atol=0.0, max_it=self.max_krylov)
             pc = ksp.getPC()
             pc.setType(PETSc.PC.Type.PYTHON)
-            pc.setPythonContext(_Preconditioner(preconditioner))
+            pc.setPythonContext(_Preconditioner(preconditioner, shares))
             ksp.solve(b, x)
             iterations = ksp.getIterationNumber()
             self.krylov_iterations += iterations
             count("traction krylov", iterations)
-            return x.array_r.copy(), cast(int, ksp.getConvergedReason()) > 0
+            return shares.gather(x.array_r), cast(int, ksp.getConvergedReason()) > 0
         finally:
             for obj in (x, b, ksp, A):
                 obj.destroy()
@@ -299,5 +357,6 @@ class TractionJacobian:
         if not converged:  # J too ill-conditioned for single-precision factors
             cols = _dofs(active)
             J = self._jacobian(active, D, self._GT[np.ix_(cols, cols)])
-            return scipy.linalg.solve(J, r, check_finite=False)
+            dy = scipy.linalg.solve(J, r, check_finite=False)
+            self.comm.Bcast(dy)  # the same on every rank
         return dy

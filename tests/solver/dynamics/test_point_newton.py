@@ -5,7 +5,9 @@
   slipping, solved after the stick restart.
 - The inner problem's linear solves (``TractionJacobian``: FGMRES with kept single-precision
   factors) against a dense double-precision solve, with the factors reused for a changed
-  derivative, updated for a few points opening and closing and renewed for another active set.
+  derivative, updated for a few points opening and closing and renewed for another active set;
+  on one rank and with the products shared among the ranks. The inner problem solved with
+  shared products takes the iterates of the one solved on one rank.
 - The compliance G of ``ContactCompliance`` (blocks once per operator, the master part per
   pairing) against E A'^-1 F^T W formed densely on the tiny joint's condensed zone.
 - The Aitken relaxation of the fixed point in the friction coefficients against linear fixed
@@ -84,6 +86,19 @@ def test_start_with_its_residual_given_repeats_the_solve():
     assert np.array_equal(given.y, plain.y)
 
 
+def test_shared_products_take_the_same_iterates():
+    """The recorded inner problem solved with G's products shared among the ranks (on every rank
+    the same iterations, to rounding the same solution as on one rank)."""
+    data = np.load(Path(__file__).parent / "data" / "stalling_slip.npz")
+    G, y_free, y0, normal, mu = (data[k] for k in ("G", "y_free", "y0", "normal", "mu"))
+    alone = solve_tractions(G, y_free, y0, normal, mu)
+    shared = solve_tractions(G, y_free, y0, normal, mu, jacobian=TractionJacobian(MPI.COMM_WORLD))
+    assert shared.converged and shared.iterations == alone.iterations
+    assert np.allclose(shared.y, alone.y, rtol=0, atol=1e-10 * np.abs(y_free).max())
+    everywhere = MPI.COMM_WORLD.allgather(shared.y)
+    assert all(np.array_equal(y, everywhere[0]) for y in everywhere)
+
+
 def test_stalled_slip_restarts_stuck():
     """Four points of an inner problem recorded on the converged joint's self-weight stage: from
     their iterate's tractions, every point slipping, Newton finds no step that lowers ||Phi||;
@@ -101,16 +116,17 @@ def test_stalled_slip_restarts_stuck():
     assert np.all(P_n < 0)  # all four in contact
 
 
-def test_reused_factors_against_dense_solve():
+@pytest.mark.parametrize("comm", [MPI.COMM_SELF, MPI.COMM_WORLD], ids=["alone", "shared"])
+def test_reused_factors_against_dense_solve(comm):
     """Each solve against a dense double-precision solve (to the single precision of the solves):
     the first factorises; a turned derivative, more points appended to G and a few points opening
     and closing reuse the factors (the last two by low-rank updates); another active set renews
     them."""
-    rng = np.random.default_rng(3)
+    rng = np.random.default_rng(3)  # the same problems on every rank
     n = 50
     G = rng.uniform(0.0, 1.0, (3 * n, 3 * n))
     G = 50.0 * G @ G.T / n  # compliance-like: symmetric positive, entries of tens
-    jacobian = TractionJacobian()
+    jacobian = TractionJacobian(comm)
     jacobian.set_compliance(G)
 
     def derivative(points):

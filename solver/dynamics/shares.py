@@ -1,0 +1,28 @@
+"""Contiguous shares of n entries among the ranks of a communicator: the products of a dense
+matrix held on every rank are computed share by share, each rank its own entries of the result,
+and joined on every rank (``solver.dynamics.traction_jacobian``)."""
+
+import numpy as np
+import numpy.typing as npt
+from mpi4py import MPI
+
+__all__ = ["Shares"]
+
+
+class Shares:
+    """Entries [start, stop) of n are this rank's; rank r holds n r / size to n (r + 1) / size."""
+
+    def __init__(self, comm: MPI.Comm, n: int):
+        self.comm, self.n = comm, n
+        self.bounds = np.array([n * r // comm.size for r in range(comm.size + 1)])
+        self.start, self.stop = (int(b) for b in self.bounds[comm.rank : comm.rank + 2])
+        self.part = slice(self.start, self.stop)
+
+    def gather(self, part: npt.NDArray) -> npt.NDArray:
+        """The n entries, on every rank, from each rank's share (float64)."""
+        part = np.ascontiguousarray(part, dtype=np.float64)
+        if self.comm.size == 1:
+            return part
+        out = np.empty(self.n)
+        self.comm.Allgatherv(part, [out, (np.diff(self.bounds), self.bounds[:-1])])
+        return out
