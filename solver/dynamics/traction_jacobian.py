@@ -37,6 +37,7 @@ from petsc4py import PETSc
 
 from common.timing import count
 from solver.dynamics.shares import Shares
+from solver.dynamics.workspace import Workspace
 
 __all__ = ["TractionJacobian"]
 
@@ -54,22 +55,6 @@ def _flush_subnormal(a: npt.NDArray) -> None:
     for start in range(0, a.shape[0], 256):
         rows = a[start : start + 256]
         rows[np.abs(rows) < 1e-20] = 0.0
-
-
-class _Workspace:
-    """Arrays kept from call to call, by name (a fresh array of tens of MB costs a page fault
-    per 4 kB page at its first touch, on every call)."""
-
-    def __init__(self):
-        self._arrays: dict[str, npt.NDArray] = {}
-
-    def get(self, name: str, shape: tuple[int, ...], dtype: type) -> npt.NDArray:
-        """An uninitialised array of this shape, in the memory of the last one of this name."""
-        size = int(np.prod(shape))
-        kept = self._arrays.get(name)
-        if kept is None or kept.size < size or kept.dtype != dtype:
-            kept = self._arrays[name] = np.empty(int(1.25 * size), dtype=dtype)
-        return kept[:size].reshape(shape)
 
 
 class _Operator:
@@ -195,7 +180,7 @@ class TractionJacobian:
         self._GT32: npt.NDArray = np.zeros((0, 0), dtype=np.float32)  # for the Newton directions
         self._shares = Shares(comm, 0)  # of the entries of G's products
         self._block: tuple[bytes, npt.NDArray] | None = None  # G_aa^T of the last active set
-        self._work = _Workspace()  # of G_aa^T and of the factors
+        self._work = Workspace()  # of G_aa^T and of the factors
         self._lu = None
         self._lu_points = np.zeros(0, dtype=np.int64)  # a_0 and D_0 of the kept factors
         self._lu_D = np.zeros((0, 3, 3))
@@ -327,13 +312,13 @@ class TractionJacobian:
         b = PETSc.Vec().createMPI(size, comm=self.comm)
         b.array[:] = r[shares.part]
         x = b.duplicate()
+        pc = ksp.getPC()
         try:
             A.setUp()
             ksp.setOperators(A)
             ksp.setType(PETSc.KSP.Type.FGMRES)
             ksp.setGMRESRestart(self.max_krylov)
             ksp.setTolerances(rtol=self.rtol, atol=0.0, max_it=self.max_krylov)
-            pc = ksp.getPC()
             pc.setType(PETSc.PC.Type.PYTHON)
             pc.setPythonContext(_Preconditioner(preconditioner, shares))
             ksp.solve(b, x)
@@ -342,7 +327,9 @@ class TractionJacobian:
             count("traction krylov", iterations)
             return shares.gather(x.array_r), cast(int, ksp.getConvergedReason()) > 0
         finally:
-            for obj in (x, b, ksp, A):
+            # the PC too: petsc4py would hand a parallel PC (and the factors its context holds)
+            # that outlives its KSP to the communicator's garbage, freed only by a clean-up
+            for obj in (x, b, ksp, pc, A):
                 obj.destroy()
 
     def solve(self, active: npt.NDArray, D: npt.NDArray, r: npt.NDArray) -> npt.NDArray:
