@@ -31,6 +31,7 @@ from petsc4py import PETSc
 from common.timing import timed
 from solver.contact.model import PointOperators
 from solver.dynamics.linear_algebra import direct_solver, solve_columns
+from solver.dynamics.workspace import GrowingMatrix, Workspace
 
 __all__ = ["ContactCompliance", "MasterOperator"]
 
@@ -79,12 +80,12 @@ def _gather_rows(comm: MPI.Comm, local: npt.NDArray) -> npt.NDArray:
     return np.concatenate(comm.allgather(np.ascontiguousarray(local)))
 
 
-def _gather_columns(comm: MPI.Comm, local: npt.NDArray, n: int) -> npt.NDArray:
-    """The n columns of a matrix held by the ranks in contiguous shares (rank by rank), on
-    every rank."""
-    counts = np.array(comm.allgather(local.shape[1])) * local.shape[0]
-    out = np.empty((n, local.shape[0]))
-    comm.Allgatherv(np.ascontiguousarray(local.T), (out, counts))
+def _gather_columns(comm: MPI.Comm, columns: npt.NDArray, out: npt.NDArray) -> npt.NDArray:
+    """The columns of a matrix held by the ranks in contiguous shares (rank by rank), on every
+    rank: ``columns`` this rank's share as rows, ``out`` (all columns x rows, C order) receives
+    them; returns the matrix (``out.T``)."""
+    counts = np.array(comm.allgather(columns.shape[0])) * columns.shape[1]
+    comm.Allgatherv(np.ascontiguousarray(columns), (out, counts))  # MPI reads the memory as is
     return out.T
 
 
@@ -137,6 +138,7 @@ class ContactCompliance:
         self._to_block = np.zeros(0, dtype=np.int64)  # block row of each rank-major row
         self._E: PETSc.Mat | None = None
         self._F: PETSc.Mat | None = None
+        self._gathered = Workspace()  # the column solves' results, gathered
         self.reset()
 
     def zone_index(self, dofs: npt.NDArray) -> npt.NDArray:
@@ -156,10 +158,29 @@ class ContactCompliance:
         """No points and no band (the factors are kept)."""
         self.points, self.band, self._counts = 0, np.zeros(0, dtype=np.int64), [0] * self.comm.size
         self._to_block = np.zeros(0, dtype=np.int64)
-        self.Q_ss, self.Q_sb = np.zeros((0, 0)), np.zeros((0, 0))
-        self.R_bs, self.Z_bb = np.zeros((0, 0)), np.zeros((0, 0))
+        self._blocks = {name: GrowingMatrix() for name in ("Q_ss", "Q_sb", "R_bs", "Z_bb")}
         self._Q_bs: npt.NDArray | None = None  # Q_sb^T, C-ordered, made when G needs it
         self._band_rows()
+
+    @property
+    def Q_ss(self) -> npt.NDArray:
+        """E_s X_F (3 |points| x 3 |points|)."""
+        return self._blocks["Q_ss"].array
+
+    @property
+    def Q_sb(self) -> npt.NDArray:
+        """E_s X_b (3 |points| x |band|)."""
+        return self._blocks["Q_sb"].array
+
+    @property
+    def R_bs(self) -> npt.NDArray:
+        """X_F on the band (|band| x 3 |points|)."""
+        return self._blocks["R_bs"].array
+
+    @property
+    def Z_bb(self) -> npt.NDArray:
+        """X_b on the band (|band| x |band|)."""
+        return self._blocks["Z_bb"].array
 
     def points_to_block(self, rank_major: npt.NDArray) -> npt.NDArray:
         """Per-point values gathered rank by rank in the blocks' point order."""
@@ -179,10 +200,11 @@ class ContactCompliance:
         order = np.sort(block)
         self._to_block = np.searchsorted(order, block)
         self._counts, self.points = counts, sum(counts)
-        self.Q_ss = self.Q_ss[np.ix_(order, order)]
-        self.Q_sb = self.Q_sb[np.ix_(order, keep_band)]
-        self.R_bs = self.R_bs[np.ix_(keep_band, order)]
-        self.Z_bb = self.Z_bb[np.ix_(keep_band, keep_band)]
+        blocks = self._blocks
+        blocks["Q_ss"].set(self.Q_ss[np.ix_(order, order)])
+        blocks["Q_sb"].set(self.Q_sb[np.ix_(order, keep_band)])
+        blocks["R_bs"].set(self.R_bs[np.ix_(keep_band, order)])
+        blocks["Z_bb"].set(self.Z_bb[np.ix_(keep_band, keep_band)])
         self._Q_bs = None
         self.band = self.band[keep_band]
         self._band_rows()
@@ -237,10 +259,10 @@ class ContactCompliance:
         self._band_rows()
         nb = len(self.band)
         m = 3 * self.points
-        Q_ss, Q_sb = np.zeros((m, m)), np.zeros((m, nb))
-        R_bs, Z_bb = np.zeros((nb, m)), np.zeros((nb, nb))
-        Q_ss[:m_old, :m_old], Q_sb[:m_old, :nb_old] = self.Q_ss, self.Q_sb
-        R_bs[:nb_old, :m_old], Z_bb[:nb_old, :nb_old] = self.R_bs, self.Z_bb
+        # the earlier blocks in their top-left corners, the new rows and columns zero
+        blocks = self._blocks
+        Q_ss, Q_sb = blocks["Q_ss"].grow(m, m), blocks["Q_sb"].grow(m, nb)
+        R_bs, Z_bb = blocks["R_bs"].grow(nb, m), blocks["Z_bb"].grow(nb, nb)
         new_points, new_band = slice(m_old, m), slice(nb_old, nb)
         # A^-1 F_N^T W: the new points' columns of Q_ss and R_bs
         EX, _, Xb = self._solve(m_new, F_new)
@@ -256,7 +278,6 @@ class ContactCompliance:
             R_bs[new_band, :m_old] = FX[:m_old].T
         E_new.destroy()
         F_new.destroy()
-        self.Q_ss, self.Q_sb, self.R_bs, self.Z_bb = Q_ss, Q_sb, R_bs, Z_bb
         self._Q_bs = None
 
     def _matrices(self) -> tuple[PETSc.Mat, PETSc.Mat]:
@@ -302,7 +323,7 @@ class ContactCompliance:
         vectors of band dofs unit, unit + 1, ... (B None): (E X, F W X) in the blocks' row order
         and X on the band, in band order, on every rank. Each rank solves a contiguous share of
         the columns with its full copy of the factors (:meth:`_column_solver`) and the shares
-        are gathered."""
+        are gathered (into kept arrays: the results hold until the next call)."""
         share = np.array_split(np.arange(n), self.comm.size)[self.comm.rank]
         first = share[0] if len(share) else 0
         if B is not None:  # B's rows are the columns to solve for, its columns zone dofs
@@ -338,11 +359,12 @@ class ContactCompliance:
             for mat in (E, F):
                 mat.destroy()
 
-        def joined(out: list[npt.NDArray], rows: int) -> npt.NDArray:
-            return _gather_columns(self.comm, np.hstack(out) if out else np.zeros((rows, 0)), n)
+        def joined(name: str, parts: list[npt.NDArray], rows: int) -> npt.NDArray:
+            columns = np.vstack([part.T for part in parts]) if parts else np.zeros((0, rows))
+            return _gather_columns(self.comm, columns, self._gathered.get(name, (n, rows)))
 
         m = 3 * self.points
-        return joined(EX, m), joined(FX, m), joined(Xb, len(self.band))
+        return joined("EX", EX, m), joined("FX", FX, m), joined("Xb", Xb, len(self.band))
 
     def _column_solver(self) -> tuple[PETSc.Mat, PETSc.Mat]:
         """The operator and LU factors of :meth:`_solve`: on several ranks a full copy of A and
