@@ -20,6 +20,7 @@ from solver.dynamics.schemes import Scheme, scheme_from_name
 from solver.dynamics.time_loop import check_event_step
 from solver.installation.dismount import DismountPlan
 from solver.installation.planning import check_time_scheme
+from solver.installation.sweep import SweepPlan
 from solver.installation.settings import (
     ContactSettings,
     DampingSettings,
@@ -41,6 +42,7 @@ SECTIONS = {
     "vibration": VibrationSettings,
     "output": OutputSettings,
     "static_force": StaticForceSettings,
+    "sweep": SweepPlan,
 }
 KNOWN_TABLES = {
     "imperfections",
@@ -50,6 +52,7 @@ KNOWN_TABLES = {
     "friction",
     "schedule",
     "modal",
+    "lumped",
     "_source",
     *SECTIONS,
 }
@@ -71,6 +74,7 @@ class InstallationCase:
     output: OutputSettings
     static_force: StaticForceSettings
     dismount: DismountPlan  #: the sequence demos/dismount.py writes into the case
+    sweep: SweepPlan  #: the sweep demos/sweep.py writes into the case
     schedule: Schedule | None  #: explicit [[schedule]] (start time 0: shifted after self-weight)
     source: str = "case"
     imperfections: dict[str, ImperfectionSettings] = field(default_factory=dict)
@@ -181,10 +185,10 @@ class InstallationCase:
 
     def fingerprint(self) -> dict[str, Any]:
         """Dotted key -> value of everything that decides the computed result: the resolved case
-        without the case file's name, the tables read after the installation
-        (``AFTER_INSTALLATION``), the output-only keys (``OUTPUT_ONLY``) and the imperfection
-        files' names, whose content counts instead (``imperfections.<part>.file_sha256``)."""
-        skipped = ("source", *AFTER_INSTALLATION)
+        without the case file's name, the demos' plans (``DEMO_PLANS``), the output-only keys
+        (``OUTPUT_ONLY``) and the imperfection files' names, whose content counts instead
+        (``imperfections.<part>.file_sha256``)."""
+        skipped = ("source", *DEMO_PLANS)
         flat = flatten({k: v for k, v in self.describe().items() if k not in skipped})
         for key in OUTPUT_ONLY:
             flat.pop(key)
@@ -201,9 +205,10 @@ class InstallationCase:
 
 #: keys that change only what a run writes, not what it computes: a resumed run may differ in them
 OUTPUT_ONLY = ("output.paraview", "output.plots")
-#: tables that the installation run does not read (the dismount sequence after it): not in the
-#: fingerprint, so that an installed state serves any dismount plan
-AFTER_INSTALLATION = ("dismount",)
+#: tables that the installation run does not read (the demos' plans, which they write into the
+#: [static_force] and [[schedule]] tables it reads): not in the fingerprint, so that an installed
+#: state serves any dismount plan
+DEMO_PLANS = ("dismount", "sweep")
 
 
 def flatten(data: Any, prefix: str = "") -> dict[str, Any]:

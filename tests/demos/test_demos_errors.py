@@ -38,7 +38,8 @@ WITHOUT_PROGRESS_BAR = ("joint_geometry", "modal", "lumped")
         ("parameter_study", ["--set", "mesh.n_circumferential=10"], ["multiple of 4"]),
         ("install", ["--quick", "--case", "scaled"], ["--quick is --case install_quick"]),
         ("install", ["--full", "--quick"], ["--full is --case scaled_full"]),
-        ("sweep", ["--quick", "--case", "coarse"], ["--quick is --case quick"]),
+        ("sweep", ["--quick", "--case", "coarse"], ["--quick is --case sweep_quick"]),
+        ("sweep", ["--set", "sweep.kind='chirp'"], ["[sweep]", "'steps' or 'ramp'"]),
         ("modal", ["--quick", "--case", "full_scale"], ["--quick is --case modal_quick"]),
         ("joint_geometry", ["--case", "no_such_case"], ["no_such_case", "presets"]),
         ("modal", ["--set", "mesh.n_circumferential=10"], ["scaled.toml: [mesh]", "multiple of 4"]),
@@ -62,7 +63,10 @@ def test_bad_options_exit_2_before_computing(demo, options, words, demo_main, sh
     "options, words",
     [
         (["--case", "no_such_case"], ["no_such_case", "presets"]),
-        (["--set", "geometry.tp.thickness=-1"], ["full_scale.toml", "thickness"]),
+        (["--set", "geometry.tp.thickness=-1"], ["lumped.toml", "thickness"]),
+        (["--mu-d", "0.9"], ["lumped.toml", "[lumped]", "mu_d", "mu_s"]),
+        (["--set", "lumped.n_frequencies=1"], ["[lumped]", "n_frequencies"]),
+        (["--quick", "--case", "full_scale"], ["--quick is --case lumped_quick"]),
         (["--scaled-case", "no_such_case"], ["no_such_case"]),
         (["--set", "1"], ["section.key=value"]),
         (["--settle", "1"], ["unrecognized arguments: --settle"]),  # no abbreviations

@@ -11,6 +11,7 @@ from mpi4py import MPI
 from common.case import read_case
 from geometry.contact_map import tp_placement
 from geometry.imperfections import ovality
+from solver.contact import FrictionLaw
 from solver.installation.case import InstallationCase
 from solver.installation.frequencies import Excitation, schedule_excitations
 from solver.dynamics.loads import (
@@ -119,6 +120,49 @@ def test_ramp_sweep_schedule():
         assert schedule.phase(1.0 + tau) == pytest.approx(math.pi * 125.0 * tau**2 / 13.0)
         f = 125.0 * tau / 13.0
         assert schedule.amplitude(1.0 + tau) == pytest.approx(eccentric_amplitude(f))
+
+
+def test_sweep_plan_is_the_case_table():
+    """[sweep] holds the sweep demo's stages (SweepPlan's defaults where absent: physics.md §3's
+    10 -> 130 Hz in 10 Hz steps, of 30 ms); they replace the [[schedule]], with the case's
+    [vibration] direction; the quick case's table; a ramp; bad entries named."""
+    from solver.installation.sweep import SweepPlan, read_sweep, sweep_case
+
+    assert _case().sweep == SweepPlan() == read_sweep(read_case("sweep"))
+    data = read_case("sweep", ["vibration.direction='lateral'", "vibration.lateral_fraction=0.2"])
+    data["schedule"] = [{"duration_s": 0.1, "frequency_hz": 50.0}]
+    sweep_case(data, read_sweep(data))
+    schedule = InstallationCase.from_dict(data).schedule
+    assert schedule is not None and len(schedule.stages) == 13
+    assert [s.frequency_hz for s in schedule.stages] == pytest.approx(np.arange(10.0, 131.0, 10.0))
+    assert all(s.duration_s == 0.03 and s.amplitude_N == "eccentric" for s in schedule.stages)
+    assert all(s.direction == "lateral" and s.lateral_fraction == 0.2 for s in schedule.stages)
+    quick = read_sweep(read_case("sweep_quick"))
+    assert [s.frequency_hz for s in quick.stages()] == [40.0, 80.0, 120.0]
+    ramp = read_sweep(read_case("sweep", ["sweep.kind='ramp'", "sweep.amplitude_N=2e3"]))
+    (stage,) = ramp.stages()
+    assert (stage.frequency_hz, stage.frequency_end_hz, stage.duration_s) == (10.0, 130.0, 1.0)
+    assert stage.amplitude_N == 2e3
+    with pytest.raises(ValueError, match=r"\[sweep\] amplitude_N"):
+        _case("sweep.amplitude_N='loud'")
+    with pytest.raises(ValueError, match=r"\[sweep\] has unknown key"):
+        _case("sweep.f_begin_hz=5.0")
+
+
+def test_lumped_study_is_the_case_table():
+    """[lumped] holds the lumped demo's study (docs/physics.md §7: LumpedStudy's defaults, the
+    values of cases/lumped.toml); its quick case the short map; bad entries named."""
+    from solver.reduced.study import LumpedStudy, read_study
+
+    assert read_study(read_case("lumped")) == LumpedStudy() == read_study({})
+    quick = read_study(read_case("lumped_quick"))
+    assert (quick.duration_s, quick.n_frequencies, quick.n_amplitudes) == (2.0, 5, 3)
+    assert quick.friction(0.2) == FrictionLaw(0.5, 0.2, math.inf)
+    with pytest.raises(ValueError, match=r"\[lumped\] mu_d"):
+        read_study({"lumped": {"mu_d": 0.9}})
+    with pytest.raises(ValueError, match="n_amplitudes"):
+        read_study({"lumped": {"n_amplitudes": 1}})
+    InstallationCase.from_dict(read_case("lumped"))  # an installation run ignores the table
 
 
 def test_ranked_stages_take_the_chosen_frequencies():
