@@ -5,7 +5,15 @@ the five sensitivity cases, the settlement after a 10 cm drop, and maps the
 settlement after harmonic axial loading over frequency x amplitude, with the
 required slip L_slip drawn in. Writes CSV files (with units) and PNG plots.
 
-Usage: mpirun -n 2 python demos/lumped.py [--quick] [--output DIR] [--case FILE] ...
+The study's friction, damping and map are the case's [lumped] table (``LumpedStudy``;
+cases/lumped.toml: the full-scale joint of cases/full_scale.toml with docs/physics.md §7's
+values); each option below sets its entry, --set lumped.KEY=VALUE too. --quick: --case
+lumped_quick (2 s of harmonic loading on a 5 x 3 map, a smoke run).
+
+Usage: mpirun -n 2 python demos/lumped.py [--quick] [--output DIR] [--case lumped]
+       [--set table.key=value ...] [--mu-s 0.5] [--mu-d 0.3] [--d-c inf] [--damping-ratio 0.01]
+       [--duration 90] [--settle-time 1] [--f-max 20] [--amp-max 5e5] [--n-freq 41]
+       [--n-amp 11] [--bvp-tol 1e-5]
 The map's runs are shared out over the MPI ranks.
 """
 
@@ -23,12 +31,13 @@ from mpi4py import MPI
 
 import numpy as np
 
-from geometry.parameters import JointGeometry, load_geometry
-from solver.contact import FrictionLaw
+from common.case import read_case
+from geometry.parameters import JointGeometry, geometry_from_case, load_geometry
 from solver.installation import cli
 from solver.post.csv import write_csv
 from solver.reduced.lumped import GRAVITY, AxialLoad, LumpedModel, simulate
 from solver.reduced.shell import JointStiffness, joint_stiffness
+from solver.reduced.study import LumpedStudy, read_study
 
 #: docs/physics.md §7 sensitivity cases: (alpha [deg], beta [deg], mu_d)
 SENSITIVITY_CASES = (
@@ -39,6 +48,21 @@ SENSITIVITY_CASES = (
     (2.5, 2.4, 0.3),
 )
 DROP_SPEED = math.sqrt(2 * GRAVITY * 0.1)  #: TP speed after a 10 cm free fall [m/s]
+DEFAULT_CASE, QUICK_CASE = "lumped", "lumped_quick"
+#: the demo's options and the [lumped] entries they set (--set lumped.KEY=VALUE wins)
+STUDY_OPTIONS = {
+    "mu_s": "mu_s",
+    "mu_d": "mu_d",
+    "d_c": "d_c",
+    "damping_ratio": "damping_ratio",
+    "duration": "duration_s",
+    "settle_time": "settle_time_s",
+    "f_max": "f_max_hz",
+    "amp_max": "amplitude_max_N",
+    "n_freq": "n_frequencies",
+    "n_amp": "n_amplitudes",
+    "bvp_tol": "bvp_tol",
+}
 
 
 def parse_args(argv: list[str] | None) -> argparse.Namespace:
@@ -47,54 +71,55 @@ def parse_args(argv: list[str] | None) -> argparse.Namespace:
         "--quick", action="store_true", help="coarse map grid and short runs (smoke test)"
     )
     p.add_argument("--output", default="output/lumped", help="output folder")
-    p.add_argument("--case", default="cases/full_scale.toml", help="TOML case file (full scale)")
+    p.add_argument("--case", help=f"case name or TOML file ({DEFAULT_CASE}; --quick: {QUICK_CASE})")
     p.add_argument(
         "--set",
         action="append",
         default=[],
         metavar="TABLE.KEY=VALUE",
-        help="override of --case (its [geometry.mp], [geometry.tp] and [material] are used)",
+        help="override of --case (its [geometry.mp], [geometry.tp], [material], [lumped])",
     )
     p.add_argument(
         "--scaled-case", default="cases/scaled.toml", help="case whose springs are also printed"
     )
-    p.add_argument("--mu-s", type=float, default=0.5, help="static friction coefficient")
-    p.add_argument(
-        "--mu-d", type=float, default=0.3, help="dynamic friction coefficient (base case)"
-    )
+    p.add_argument("--mu-s", type=float, help="static friction coefficient (0.5)")
+    p.add_argument("--mu-d", type=float, help="dynamic friction coefficient, base case (0.3)")
     p.add_argument(
         "--d-c",
         type=float,
-        default=math.inf,
         help="friction decay [s/m] of mu(v) (inf: step from mu_s to mu_d, docs/physics.md §7)",
     )
-    p.add_argument("--damping-ratio", type=float, default=0.01, help="fraction of critical per dof")
+    p.add_argument("--damping-ratio", type=float, help="fraction of critical per dof (0.01)")
+    p.add_argument("--duration", type=float, help="harmonic loading time [s] (90)")
     p.add_argument(
-        "--duration", type=float, default=None, help="harmonic loading time [s] (90; quick 2)"
+        "--settle-time", type=float, help="self-weight alone before the harmonic [s] (1)"
     )
-    p.add_argument(
-        "--settle-time", type=float, default=1.0, help="self-weight alone before the harmonic [s]"
-    )
-    p.add_argument("--f-max", type=float, default=20.0, help="largest map frequency [Hz]")
-    p.add_argument("--amp-max", type=float, default=500e3, help="largest map amplitude [N]")
-    p.add_argument("--n-freq", type=int, default=None, help="map frequencies (41; quick 5)")
-    p.add_argument("--n-amp", type=int, default=None, help="map amplitudes (11; quick 3)")
-    p.add_argument("--bvp-tol", type=float, default=1e-5, help="shell collocation tolerance")
+    p.add_argument("--f-max", type=float, help="largest map frequency [Hz] (20)")
+    p.add_argument("--amp-max", type=float, help="largest map amplitude [N] (5e5)")
+    p.add_argument("--n-freq", type=int, help="map frequencies (41)")
+    p.add_argument("--n-amp", type=int, help="map amplitudes (11)")
+    p.add_argument("--bvp-tol", type=float, help="shell collocation tolerance (1e-5)")
     args = p.parse_args(argv)
-    args.duration = args.duration if args.duration is not None else (2.0 if args.quick else 90.0)
-    args.n_freq = args.n_freq if args.n_freq is not None else (5 if args.quick else 41)
-    args.n_amp = args.n_amp if args.n_amp is not None else (3 if args.quick else 11)
-    if not (args.duration > 0 and args.settle_time >= 0 and args.f_max > 0 and args.amp_max >= 0):
-        p.error("--duration and --f-max must be positive, --settle-time and --amp-max >= 0")
-    if args.n_freq < 2 or args.n_amp < 2:
-        p.error("--n-freq and --n-amp must be at least 2")
+    if args.quick and args.case not in (None, QUICK_CASE):
+        p.error(f"--quick is --case {QUICK_CASE}; give one or the other")
+    name = args.case or (QUICK_CASE if args.quick else DEFAULT_CASE)
+    given = [
+        f"lumped.{key}={getattr(args, option)}"
+        for option, key in STUDY_OPTIONS.items()
+        if getattr(args, option) is not None
+    ]
     try:
-        for mu_d in {args.mu_d} | {case[2] for case in SENSITIVITY_CASES}:
-            FrictionLaw(args.mu_s, mu_d, args.d_c)
-        args.joint, args.material, _ = load_geometry(args.case, args.set)
+        case = read_case(name, given + args.set)
+        args.joint, args.material, _ = geometry_from_case(case)
         args.scaled_joint, args.scaled_material, _ = load_geometry(args.scaled_case)
     except ValueError as e:
         p.error(str(e))
+    try:
+        args.study = read_study(case)
+        for _, _, mu_d in SENSITIVITY_CASES:
+            args.study.friction(mu_d)
+    except ValueError as e:
+        p.error(f"{case['_source']}: {e}")
     return args
 
 
@@ -114,15 +139,17 @@ def required_slip(joint: JointGeometry, alpha_deg: float, beta_deg: float) -> fl
 
 
 def build_model(
-    joint: JointGeometry, springs: JointStiffness, mass: float, args, mu_d: float
+    joint: JointGeometry, springs: JointStiffness, mass: float, study: LumpedStudy, mu_d: float
 ) -> LumpedModel:
+    """The lumped model of ``joint`` with the study's friction (dynamic coefficient ``mu_d``)
+    and damping."""
     return LumpedModel(
         mass=mass,
         springs=springs,
         alpha=joint.mp.half_angle,
         lever=0.5 * joint.tp.thickness,
-        friction=FrictionLaw(args.mu_s, mu_d, args.d_c),
-        damping_ratio=args.damping_ratio,
+        friction=study.friction(mu_d),
+        damping_ratio=study.damping_ratio,
     )
 
 
@@ -135,6 +162,7 @@ def main(argv: list[str] | None = None) -> int:
     except ValueError as e:
         return cli.fail(comm, str(e))
     t_start = time.perf_counter()
+    study = args.study
 
     joint, material = args.joint, args.material
     scaled_joint, scaled_material = args.scaled_joint, args.scaled_material
@@ -146,13 +174,13 @@ def main(argv: list[str] | None = None) -> int:
     jobs = [(ab, with_angles(joint, *ab), material) for ab in angle_cases]
     jobs.append(("scaled", scaled_joint, scaled_material))
     mine = {
-        key: joint_stiffness(j, mat, tol=args.bvp_tol)
+        key: joint_stiffness(j, mat, tol=study.bvp_tol)
         for n, (key, j, mat) in enumerate(jobs)
         if n % comm.size == comm.rank
     }
     springs = {k: v for part in comm.allgather(mine) for k, v in part.items()}
     base = (SENSITIVITY_CASES[0][0], SENSITIVITY_CASES[0][1])
-    base_model = build_model(joint, springs[base], mass, args, args.mu_d)
+    base_model = build_model(joint, springs[base], mass, study, study.mu_d)
     if root:
         rows = []
         print("Shell-theory springs (totals over the circumference; off-diagonal terms dropped):")
@@ -189,7 +217,7 @@ def main(argv: list[str] | None = None) -> int:
     for n, ((alpha, beta, mu_d), v0) in enumerate(runs):
         if n % comm.size == comm.rank:
             model = build_model(
-                with_angles(joint, alpha, beta), springs[(alpha, beta)], mass, args, mu_d
+                with_angles(joint, alpha, beta), springs[(alpha, beta)], mass, study, mu_d
             )
             mine[n] = simulate(model, AxialLoad(static=weight), 10.0, initial_velocity=v0)
     trajs = {k: v for part in comm.gather(mine, root=0) or [] for k, v in part.items()}
@@ -198,7 +226,7 @@ def main(argv: list[str] | None = None) -> int:
         print(
             f"\nSelf-weight {weight / 1e3:.0f} kN (TP mass {mass / 1e3:.1f} t) "
             "released at first contact, "
-            f"mu_s = {args.mu_s}:"
+            f"mu_s = {study.mu_s}:"
         )
         rows = []
         for n, (alpha, beta, mu_d) in enumerate(SENSITIVITY_CASES):
@@ -207,7 +235,7 @@ def main(argv: list[str] | None = None) -> int:
                 f"  alpha/beta = {alpha}/{beta} deg, mu_d = {mu_d}: settlement {1e3 * s:7.1f} mm"
                 f"   (L_slip {1e3 * l_slip:6.1f} mm, {'reached' if s >= l_slip else 'not reached'})"
             )
-            rows.append([alpha, beta, args.mu_s, mu_d, 1e3 * s, 1e3 * l_slip, int(s >= l_slip)])
+            rows.append([alpha, beta, study.mu_s, mu_d, 1e3 * s, 1e3 * l_slip, int(s >= l_slip)])
         write_csv(
             out / "self_weight.csv",
             ["alpha_deg", "beta_deg", "mu_s", "mu_d", "settlement_mm", "L_slip_mm", "reached"],
@@ -229,8 +257,8 @@ def main(argv: list[str] | None = None) -> int:
             )
 
     # --- settlement map: runs shared over ranks --------------------------------------
-    freqs = np.linspace(0.0, args.f_max, args.n_freq)
-    amps = np.linspace(0.0, args.amp_max, args.n_amp)
+    freqs = np.linspace(0.0, study.f_max_hz, study.n_frequencies)
+    amps = np.linspace(0.0, study.amplitude_max_N, study.n_amplitudes)
     grid = [(i, k) for i in range(freqs.size) for k in range(amps.size)]
     model = base_model
     mine = []
@@ -238,9 +266,12 @@ def main(argv: list[str] | None = None) -> int:
         if n % comm.size != comm.rank:
             continue
         load = AxialLoad(
-            static=weight, amplitude=amps[k], frequency=freqs[i], harmonic_start=args.settle_time
+            static=weight,
+            amplitude=amps[k],
+            frequency=freqs[i],
+            harmonic_start=study.settle_time_s,
         )
-        traj = simulate(model, load, args.settle_time + args.duration)
+        traj = simulate(model, load, study.settle_time_s + study.duration_s)
         mine.append((i, k, traj.final_settlement, traj.stuck_forever, len(traj.events), traj.t[-1]))
     gathered = comm.gather(mine, root=0)
     if root:
@@ -265,8 +296,8 @@ def main(argv: list[str] | None = None) -> int:
         l_slip = joint.required_slip
         reached = settlement >= l_slip
         print(
-            f"\nSettlement after {args.duration:g} s of harmonic loading "
-            f"(after {args.settle_time:g} s of self-weight), "
+            f"\nSettlement after {study.duration_s:g} s of harmonic loading "
+            f"(after {study.settle_time_s:g} s of self-weight), "
             f"{freqs[0]:g}-{freqs[-1]:g} Hz x {amps[0] / 1e3:g}-{amps[-1] / 1e3:g} kN, "
             f"{freqs.size} x {amps.size} runs:"
         )
@@ -277,12 +308,14 @@ def main(argv: list[str] | None = None) -> int:
             f"L_slip = {1e3 * l_slip:.1f} mm reached in {int(reached.sum())} of {reached.size} runs"
         )
         print(f"  runs that ended proven stuck: {sum(r[3] for r in rows)} of {len(rows)}")
-        plot(out, freqs, amps, settlement, l_slip, histories, args)
+        plot(out, freqs, amps, settlement, l_slip, histories, study.duration_s)
         print(f"\nwrote {out}/ in {time.perf_counter() - t_start:.1f} s")
     return 0
 
 
-def plot(out: Path, freqs, amps, settlement, l_slip, histories, args) -> None:
+def plot(out: Path, freqs, amps, settlement, l_slip, histories, duration_s: float) -> None:
+    """The settlement map [mm] over frequency x amplitude with L_slip in red, and the
+    self-weight and drop histories."""
     import matplotlib
 
     matplotlib.use("Agg")
@@ -298,7 +331,7 @@ def plot(out: Path, freqs, amps, settlement, l_slip, histories, args) -> None:
         ax.contour(freqs, amps / 1e3, settlement.T, levels=[l_slip], colors="red", linewidths=2)
     bar.ax.axhline(1e3 * l_slip, color="red", linewidth=2)
     ax.set_title(
-        f"Settlement after {args.duration:g} s harmonic axial load "
+        f"Settlement after {duration_s:g} s harmonic axial load "
         f"(red: L_slip = {1e3 * l_slip:.0f} mm"
         + ("" if np.nanmax(settlement) >= l_slip else ", not reached")
         + ")",
