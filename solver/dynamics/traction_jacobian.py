@@ -307,9 +307,10 @@ class TractionJacobian:
         shares = Shares(self.comm, len(r))
         size = (shares.stop - shares.start, len(r))
         operator = _Operator(self._block_rows(active), D, shares)
-        A = PETSc.Mat().createPython((size, size), operator, comm=self.comm)
-        ksp = PETSc.KSP().create(self.comm)
-        b = PETSc.Vec().createMPI(size, comm=self.comm)
+        comm = cast(PETSc.Comm, self.comm)  # petsc4py takes mpi4py's communicators
+        A = PETSc.Mat().createPython((size, size), operator, comm=comm)
+        ksp = PETSc.KSP().create(comm)
+        b = PETSc.Vec().createMPI(size, comm=comm)
         b.array[:] = r[shares.part]
         x = b.duplicate()
         pc = ksp.getPC()
