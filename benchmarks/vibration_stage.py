@@ -107,7 +107,12 @@ def main(argv=None) -> int:
     else:
         model = set_up_joint_model(comm, case)
     problem = model.problem
-    say(f"{a.case}: {model.n_dofs} dofs")
+    per_rank = comm.allgather(model.contact.slave.num_points)
+    say(
+        f"{a.case}: {model.n_dofs} dofs, {sum(per_rank)} slave points (per rank {per_rank}), "
+        f"{model.contact.master.num_facets} master facets, {comm.size} rank(s) "
+        f"({case.mesh.partition} partition)"
+    )
     record = {"case": a.case, "overrides": a.set}
     if a.installed is not None:
         kept = "" if a.stage is None else f", after its stage {a.stage}"
