@@ -1,6 +1,7 @@
-"""Contiguous shares of n entries among the ranks of a communicator: the products of a dense
-matrix held on every rank are computed share by share, each rank its own entries of the result,
-and joined on every rank (``solver.dynamics.traction_jacobian``)."""
+"""Contiguous shares of n entries (or rows) among the ranks of a communicator: dense work that
+every rank holds the data of (products with a dense matrix, columns of a solve) is computed
+share by share, each rank its own entries of the result, and joined on every rank
+(``solver.dynamics.traction_jacobian``)."""
 
 import numpy as np
 import numpy.typing as npt
@@ -19,10 +20,13 @@ class Shares:
         self.part = slice(self.start, self.stop)
 
     def gather(self, part: npt.NDArray) -> npt.NDArray:
-        """The n entries, on every rank, from each rank's share (float64)."""
+        """The n entries, on every rank, from each rank's share (float64): ``part`` holds this
+        rank's entries along its first axis (entries of a vector, or rows of the same shape)."""
         part = np.ascontiguousarray(part, dtype=np.float64)
         if self.comm.size == 1:
             return part
-        out = np.empty(self.n)
-        self.comm.Allgatherv(part, [out, (np.diff(self.bounds), self.bounds[:-1])])
+        row = int(np.prod(part.shape[1:]))
+        out = np.empty((self.n, *part.shape[1:]))
+        counts = row * np.diff(self.bounds)
+        self.comm.Allgatherv(part, [out, (counts, row * self.bounds[:-1])])
         return out

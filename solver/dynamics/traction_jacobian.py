@@ -24,6 +24,8 @@ On several ranks every rank holds G and the factors; the products with G (FGMRES
 residual's G lambda and the Newton direction's rows off the active set) are computed in
 contiguous shares of their entries, each rank its own, and joined (``solver.dynamics.shares``);
 FGMRES runs on the ranks' shares of its vectors, so that all ranks take the same iterations.
+The columns of a Woodbury update are solved in shares as well; the factorisations and the
+preconditioner's triangular solves are repeated on every rank.
 """
 
 from collections.abc import Callable
@@ -97,6 +99,7 @@ class _Update:
         D: npt.NDArray,
         changed: npt.NDArray,
         GT: npt.NDArray,
+        comm: MPI.Comm,
     ):
         union = np.union1d(reference, active)
         closed = np.setdiff1d(active, reference)
@@ -114,9 +117,15 @@ class _Update:
         dD[in_active] = D[np.searchsorted(active, changed[in_active])]
         in_reference = np.isin(changed, reference)
         dD[in_reference] -= D_0[np.searchsorted(reference, changed[in_reference])]
-        G_Uc = GT[np.ix_(_dofs(changed), _dofs(union))].T
-        U = np.einsum("uci,cij->ucj", G_Uc.reshape(self.n, -1, 3), dD).reshape(self.n, -1)
-        self.W = self._reference_solve(U)  # R^-1 U
+        # R^-1 U, the changed points' columns in shares among the ranks
+        shares = Shares(comm, len(changed))
+        mine = changed[shares.part]
+        W = np.zeros((len(mine), 3, self.n))
+        if len(mine):
+            G_Uc = GT[np.ix_(_dofs(mine), _dofs(union))].T.reshape(self.n, len(mine), 3)
+            U = np.einsum("uci,cij->ucj", G_Uc, dD[shares.part]).reshape(self.n, 3 * len(mine))
+            W[:] = self._reference_solve(U).T.reshape(W.shape)
+        self.W = shares.gather(W).reshape(3 * len(changed), self.n).T
         capacitance = self.W[self.at_changed]
         capacitance[np.diag_indices_from(capacitance)] += 1.0
         self.capacitance = scipy.linalg.lu_factor(capacitance, check_finite=False)
@@ -294,7 +303,7 @@ class TractionJacobian:
             return None
         key = (active.tobytes(), changed.tobytes())
         if self._update is None or self._update[0] != key:
-            update = _Update(lu, reference, self._lu_D, active, D, changed, self._GT32)
+            update = _Update(lu, reference, self._lu_D, active, D, changed, self._GT32, self.comm)
             self._update = (key, update)
             self.updates += 1
             count("traction updates")

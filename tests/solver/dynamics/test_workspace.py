@@ -1,8 +1,8 @@
 """Kept arrays (``solver.dynamics.workspace``) and shares of a product among the ranks
 (``solver.dynamics.shares``): a growing matrix keeps its entries and zeroes the new ones, within
 its room and beyond it; a workspace array of a name reuses its memory while it fits; the shares
-of n entries cover them once, and gathered they give the whole product on every rank (serially
-and on 2 ranks)."""
+of n entries cover them once, and gathered they give the whole product (or the rows of a matrix)
+on every rank (serially and on 2 ranks)."""
 
 import numpy as np
 import pytest
@@ -51,3 +51,5 @@ def test_shares_cover_the_entries_once(n):
     v = np.linspace(-1.0, 1.0, n)
     product = shares.gather(G[shares.part] @ v)
     assert np.allclose(product, G @ v, rtol=1e-14)
+    assert np.array_equal(shares.gather(G[shares.part]), G)
+    assert np.array_equal(shares.gather(G[shares.part, None, :]), G[:, None, :])
