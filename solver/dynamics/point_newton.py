@@ -70,6 +70,9 @@ class PointNewtonSolver:
         candidate_gap: points within this gap of the master [m] (and all points of their slave
             facets) are candidates; points outside that come into contact are added.
         traction_rtol, traction_iterations: tolerance and iteration limit of the inner problem.
+        traction_forcing: the inner problem also stops where its residual, as forces on the
+            points, is below this fraction of the outer residual ||R_k|| (an inexact outer
+            Newton step; the outer test on the true residual decides convergence).
         pairing_rtol: G is recomputed when the candidates' master parts moved by more than this
             fraction since it was (or a candidate paired with another master facet).
         slow_contraction: G is also recomputed at the present pairing when the last outer
@@ -93,6 +96,7 @@ class PointNewtonSolver:
         candidate_gap: float = 2e-6,
         traction_rtol: float = 1e-12,
         traction_iterations: int = 60,
+        traction_forcing: float = 1e-3,
         pairing_rtol: float = 1e-2,
         slow_contraction: float = 0.03,
         look_ahead: float = 4.0,
@@ -100,8 +104,8 @@ class PointNewtonSolver:
     ):
         if max_iterations < 1:
             raise ValueError(f"max_iterations must be >= 1, got {max_iterations}")
-        if not (rtol > 0 and atol >= 0 and traction_rtol > 0):
-            raise ValueError("tolerances must be positive (atol >= 0)")
+        if not (rtol > 0 and atol >= 0 and traction_rtol > 0 and traction_forcing >= 0):
+            raise ValueError("tolerances must be positive (atol, traction_forcing >= 0)")
         if not candidate_gap >= 0:
             raise ValueError(f"candidate_gap must be >= 0 m, got {candidate_gap}")
         if not look_ahead >= 1:
@@ -114,6 +118,7 @@ class PointNewtonSolver:
         self.candidate_gap = candidate_gap
         self.look_ahead, self.drop_after = look_ahead, drop_after
         self.traction_rtol, self.traction_iterations = traction_rtol, traction_iterations
+        self.traction_forcing = traction_forcing
         self._comm: MPI.Comm = A.getComm().tompi4py()
         self._bc_rows, self._bc_local = dirichlet_rows(bcs)
         start, end = A.getOwnershipRange()
@@ -262,8 +267,9 @@ class PointNewtonSolver:
         return np.unique(np.concatenate(self._comm.allgather(np.unique(master_dofs))))
 
     def _gather_points(self, contact: NitscheContact):
-        """The candidates' trial tractions, normals, friction coefficients and weights (in the
-        compliance blocks' order), their master operator on the band and its dofs and values."""
+        """The candidates' trial tractions, normals, friction coefficients, weights w / gamma and
+        areas w [m^2] (in the compliance blocks' order), their master operator on the band and its
+        dofs and values."""
         comm, points = self._comm, self._candidates
         ops = contact.point_operators(points)
         trial = contact.trial_tractions()
@@ -279,6 +285,7 @@ class PointNewtonSolver:
             gather(trial.normal[points]),
             gather(trial.mu[points]),
             gather(ops.weight),
+            gather(contact.slave.weights[points]),
             self.compliance.master_operator(master_dofs, master),
             (master_dofs, master),
         )
@@ -336,7 +343,7 @@ class PointNewtonSolver:
             if result is not None:
                 break
             self._update_points(contact, first=k == 0)
-            y_k, normal, mu, weight, M_b, master = self._gather_points(contact)
+            y_k, normal, mu, weight, area, M_b, master = self._gather_points(contact)
             mu_inner = relaxation(mu)
             # a kept G that slowed the last iteration down is rebuilt at the present pairing,
             # unless the coefficients moved (the slow rate is then the fixed point's in mu)
@@ -365,6 +372,8 @@ class PointNewtonSolver:
                     self.traction_iterations,
                     jacobian=self.jacobian,
                     evaluated=evaluated,
+                    area=area,
+                    force_tol=self.traction_forcing * norm,
                 )
                 if solution.converged:
                     self._last_y = solution.y

@@ -164,7 +164,9 @@ class TractionJacobian:
         max_krylov: FGMRES iterations with the kept factors before they are renewed.
         rtol: relative residual of the solves, at least 1e-6: their products are in single
             precision (the Newton iteration checks its own residual in double, so this only
-            sets how close each step is to the exact Newton step).
+            sets how close each step is to the exact Newton step; 1e-4 takes the Newton
+            iterations of 1e-6 to the accuracy the outer iteration asks, in fewer FGMRES
+            iterations, docs/contact.md section 6a).
         max_update: the kept factors are updated for at most this fraction of their points
             changing (a rank-3 term per point), renewed beyond it.
         turn: a point whose D differs from the kept factors' by more than this (Frobenius norm;
@@ -175,7 +177,7 @@ class TractionJacobian:
         self,
         comm: MPI.Comm = MPI.COMM_SELF,
         max_krylov: int = 30,
-        rtol: float = 1e-6,
+        rtol: float = 1e-4,
         max_update: float = 0.1,
         turn: float = 0.25,
     ):

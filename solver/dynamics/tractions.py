@@ -103,6 +103,8 @@ def solve_tractions(
     jacobian: TractionJacobian | None = None,
     restarts: int = 2,
     evaluated: Evaluation | None = None,
+    area: npt.NDArray | None = None,
+    force_tol: float = 0.0,
 ) -> TractionSolution:
     """Solve Phi(y) = y - y_free + G lambda(y) = 0 for the trial tractions y [Pa] of points with
     normals ``normal`` (np, 3) and friction coefficients ``mu`` (np,), from y0.
@@ -113,7 +115,9 @@ def solve_tractions(
     Where no step decreases ||Phi|| (the slip law's derivative does not see a point that should
     stick: Newton stalls with every point slipping), the iteration restarts from
     :func:`stick_restart` of its iterate, at most ``restarts`` times. Converged when
-    ||Phi|| <= rtol max(||y_free||, ||y||) (infinity norms). ``jacobian``: kept by the caller
+    ||Phi|| <= rtol max(||y_free||, ||y||) (infinity norms), or where ``area`` (np,) [m^2] is
+    given, when Phi as forces on the points, ||area Phi|| (2-norm), is at most ``force_tol`` [N]
+    (the accuracy an outer Newton iteration needs). ``jacobian``: kept by the caller
     between calls for the same points, so that its factors are reused. ``evaluated``:
     :func:`traction_residual` at y0 with this G, y_free, normal and mu, where the caller has
     it already.
@@ -129,8 +133,14 @@ def solve_tractions(
     P_t, lam, lam_y, phi = evaluate(y) if evaluated is None else evaluated
     norm = float(np.linalg.norm(phi))
     scale = max(np.abs(y_free).max(initial=0.0), np.abs(y).max(initial=0.0), 1.0)
-    for iteration in range(max_iterations + 1):
+
+    def converged() -> bool:
         if np.abs(phi).max(initial=0.0) <= rtol * scale:
+            return True
+        return area is not None and np.linalg.norm(area[:, None] * phi.reshape(-1, 3)) <= force_tol
+
+    for iteration in range(max_iterations + 1):
+        if converged():
             return TractionSolution(y, lam_y, iteration, True)
         if iteration == max_iterations:
             break

@@ -99,6 +99,30 @@ def test_shared_products_take_the_same_iterates():
     assert all(np.array_equal(y, everywhere[0]) for y in everywhere)
 
 
+def test_force_tolerance_stops_at_the_first_iterate_below_it():
+    """With point areas given, the inner problem stops at the first iterate whose residual as
+    forces on the points, ||area Phi|| [N], is at most the force tolerance (an outer Newton
+    iteration's need), before the relative tolerance."""
+    data = np.load(Path(__file__).parent / "data" / "stalling_slip.npz")
+    G, y_free, y0, normal, mu = (data[k] for k in ("G", "y_free", "y0", "normal", "mu"))
+    area = np.full(len(mu), 1e-3)  # [m^2]
+
+    def force(y, multipliers):
+        return np.linalg.norm(area[:, None] * (y - y_free + G @ multipliers).reshape(-1, 3))
+
+    jacobian = TractionJacobian()
+    jacobian.set_compliance(G)
+    tol = 1e-3 * force(y0, traction_residual(jacobian, y0, y_free, normal, mu).lam)
+    full = solve_tractions(G, y_free, y0, normal, mu)
+    loose = solve_tractions(G, y_free, y0, normal, mu, area=area, force_tol=tol)
+    assert loose.converged and 0 < loose.iterations < full.iterations
+    assert force(loose.y, loose.multipliers) <= tol
+    before = solve_tractions(
+        G, y_free, y0, normal, mu, max_iterations=loose.iterations - 1, area=area, force_tol=tol
+    )
+    assert not before.converged and force(before.y, before.multipliers) > tol
+
+
 def test_stalled_slip_restarts_stuck():
     """Four points of an inner problem recorded on the converged joint's self-weight stage: from
     their iterate's tractions, every point slipping, Newton finds no step that lowers ||Phi||;
@@ -126,7 +150,7 @@ def test_reused_factors_against_dense_solve(comm):
     n = 50
     G = rng.uniform(0.0, 1.0, (3 * n, 3 * n))
     G = 50.0 * G @ G.T / n  # compliance-like: symmetric positive, entries of tens
-    jacobian = TractionJacobian(comm)
+    jacobian = TractionJacobian(comm, rtol=1e-6)
     jacobian.set_compliance(G)
 
     def derivative(points):
