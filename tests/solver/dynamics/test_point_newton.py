@@ -2,7 +2,8 @@
 
 - The inner problem y - y_free + G lambda(y) = 0 for uncoupled points (G = g I per point) against
   its closed form (open, stick, slip); a recorded problem where Newton stalls with every point
-  slipping, solved after the stick restart.
+  slipping, solved after the stick restart; the same problem stopped at the first iterate whose
+  residual as forces on the points is below a force tolerance.
 - The inner problem's linear solves (``TractionJacobian``: FGMRES with kept single-precision
   factors) against a dense double-precision solve, with the factors reused for a changed
   derivative, updated for a few points opening and closing and renewed for another active set;
