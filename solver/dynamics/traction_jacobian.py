@@ -13,23 +13,12 @@ them (Woodbury; exactly for the G the factors were made with): on the union U of
                        opened, D_0 at the other points of a_0,
 
 is the reference R = I + G_UU D_r (D_r = D_0 on a_0, 0 elsewhere: block lower triangular, solved
-with the factors of J_0) plus the term G_Uc (D' - D_r)_c of the changed points c, split by
-``low_rank`` into as many columns as D' - D_r has rank at each point: 2 where the point stayed
-in contact (between stick and slip, or a slip direction turned) or opened or closed slipping, 3
-where it opened or closed stuck. P restricted to a is the Jacobian at the present set with D_0
-at the points kept and the changed points' D of when the update was made, so FGMRES only
-corrects the smaller turns of the slip directions. The
+with the factors of J_0) plus a term of rank 3 |changed points|, G_Uc (D' - D_r)_c. P restricted to
+a is the Jacobian at the present set with D_0 at the points kept and the changed points' D of
+when the update was made, so FGMRES only corrects the smaller turns of the slip directions. The
 factors are renewed when more than ``max_update`` of the points changed, or when FGMRES does not
 converge in ``max_krylov`` iterations (if it fails with new factors too, a double-precision
 solve). FGMRES (flexible) because a solve in single precision is not exactly linear.
-
-The factors are those of the reduced form of J_0: per point the derivative has rank r_p (3 at a
-stuck point, 2 at a slipping one, 1 at a point tied normally only), D_0 = U V^T with U and V of
-r_p columns per point (``low_rank``), and by the Woodbury identity
-
-    J_0^-1 r = r - G_00 U K^-1 V^T r,   K = I + V^T G_00 U   (sum of r_p unknowns),
-
-so that a factorisation costs about (2/3)^3 of that of J_0 where most points slip.
 
 On several ranks every rank holds G and the factors; the products with G (FGMRES's operator, the
 residual's G lambda and the Newton direction's rows off the active set) are computed in
@@ -45,7 +34,6 @@ from typing import cast
 import numpy as np
 import numpy.typing as npt
 import scipy.linalg
-import scipy.sparse
 from mpi4py import MPI
 from petsc4py import PETSc
 
@@ -53,7 +41,7 @@ from common.timing import count
 from solver.dynamics.shares import Shares
 from solver.dynamics.workspace import Workspace
 
-__all__ = ["TractionJacobian", "low_rank"]
+__all__ = ["TractionJacobian"]
 
 Solve = Callable[[npt.NDArray], npt.NDArray]
 
@@ -69,51 +57,6 @@ def _flush_subnormal(a: npt.NDArray) -> None:
     for start in range(0, a.shape[0], 256):
         rows = a[start : start + 256]
         rows[np.abs(rows) < 1e-20] = 0.0
-
-
-def low_rank(D: npt.NDArray) -> tuple[npt.NDArray, npt.NDArray]:
-    """D = U V^T for the per-point blocks D (m, 3, 3), from their singular value decompositions:
-    U and V (3 m x r, sparse) with the r_p columns per point of its nonzero
-    singular values (relative to 1, the size of D's entries)."""
-    W, S, ZT = np.linalg.svd(D)
-    kept = S > 1e-12
-    point, column = np.nonzero(kept)
-    rank_columns = np.arange(len(point))
-    rows = (3 * point[:, None] + np.arange(3)).ravel()
-    cols = np.repeat(rank_columns, 3)
-    shape = (3 * len(D), len(point))
-    U = (W * S[:, None, :])[point, :, column].ravel()  # (r, 3): column c of point p's W S
-    V = ZT[point, column, :].ravel()  # rows of Z^T are the columns of V
-
-    def as_matrix(values: npt.NDArray) -> scipy.sparse.csr_matrix:
-        return scipy.sparse.csr_matrix((values, (rows, cols)), shape=shape)
-
-    return as_matrix(U), as_matrix(V)
-
-
-class _Factors:
-    """Single-precision factors of J_0 = I + G_00 D_0 in reduced form (module docstring):
-    J_0^-1 r = r - G_00 U K^-1 V^T r with the LU factors of K = I + V^T G_00 U."""
-
-    def __init__(self, rows: npt.NDArray, D: npt.NDArray, work: Workspace):
-        """``rows`` = G_00^T (C order, single precision), D (m, 3, 3) the derivative at the
-        points; ``work`` holds the memory of the reduced arrays."""
-        self.U, self.V = (M.astype(np.float32) for M in low_rank(D))
-        r = self.U.shape[1]
-        # (G_00 U)^T = U^T G_00^T, rows by rows of G_00^T
-        self.GU_T = work.get("reduced rows", (r, rows.shape[1]), np.float32)
-        self.GU_T[:] = self.U.T @ rows
-        # K^T = I + (G_00 U)^T V, so that K (its transpose) is in Fortran order
-        KT = work.get("reduced block", (r, r), np.float32)
-        KT[:] = (self.V.T @ self.GU_T.T).T
-        KT[np.diag_indices_from(KT)] += 1.0
-        _flush_subnormal(KT)
-        self.lu = scipy.linalg.lu_factor(KT.T, overwrite_a=True, check_finite=False)
-
-    def solve(self, r: npt.NDArray) -> npt.NDArray:
-        """J_0^-1 r (a vector or columns)."""
-        s = scipy.linalg.lu_solve(self.lu, (self.V.T @ r).astype(np.float32), check_finite=False)
-        return r - self.GU_T.T @ s
 
 
 class _Operator:
@@ -149,7 +92,7 @@ class _Update:
 
     def __init__(
         self,
-        solve_0: Solve,
+        lu: tuple[npt.NDArray, npt.NDArray],
         reference: npt.NDArray,
         D_0: npt.NDArray,
         active: npt.NDArray,
@@ -160,7 +103,7 @@ class _Update:
     ):
         union = np.union1d(reference, active)
         closed = np.setdiff1d(active, reference)
-        self.solve_0, self.n = solve_0, 3 * len(union)
+        self.lu, self.n = lu, 3 * len(union)
         self.at_0 = _dofs(np.searchsorted(union, reference))
         self.at_active = _dofs(np.searchsorted(union, active))
         self.at_closed = _dofs(np.searchsorted(union, closed))
@@ -168,27 +111,31 @@ class _Update:
         self.D_0 = D_0
         # G_{closed, a_0}: the closed points' rows of R below J_0
         self.G_c0 = GT[np.ix_(_dofs(reference), _dofs(closed))].T.astype(np.float64)
-        # the update G_Uc (D' - D_r)_c = (G_Uc dU) dV^T, D' = D on a (0 off it), D_r = D_0 on
-        # a_0, of the rank of D' - D_r at each changed point (2 between stick and slip)
+        # the update's columns G_Uc (D' - D_r)_c, D' = D on a (0 off it), D_r = D_0 on a_0
         dD = np.zeros((len(changed), 3, 3))
         in_active = np.isin(changed, active)
         dD[in_active] = D[np.searchsorted(active, changed[in_active])]
         in_reference = np.isin(changed, reference)
         dD[in_reference] -= D_0[np.searchsorted(reference, changed[in_reference])]
-        dU, self.dV = low_rank(dD)
-        # R^-1 G_Uc dU, its columns in shares among the ranks
-        shares = Shares(comm, dU.shape[1])
-        G_Uc = GT[np.ix_(_dofs(changed), _dofs(union))]  # (G_Uc)^T
-        W = self._reference_solve((dU[:, shares.part].T @ G_Uc).T)
-        self.W = shares.gather(W.T).T
-        capacitance = self.dV.T @ self.W[self.at_changed]
+        # R^-1 U, the changed points' columns in shares among the ranks
+        shares = Shares(comm, len(changed))
+        mine = changed[shares.part]
+        W = np.zeros((len(mine), 3, self.n))
+        if len(mine):
+            G_Uc = GT[np.ix_(_dofs(mine), _dofs(union))].T.reshape(self.n, len(mine), 3)
+            U = np.einsum("uci,cij->ucj", G_Uc, dD[shares.part]).reshape(self.n, 3 * len(mine))
+            W[:] = self._reference_solve(U).T.reshape(W.shape)
+        self.W = shares.gather(W).reshape(3 * len(changed), self.n).T
+        capacitance = self.W[self.at_changed]
         capacitance[np.diag_indices_from(capacitance)] += 1.0
         self.capacitance = scipy.linalg.lu_factor(capacitance, check_finite=False)
 
     def _reference_solve(self, r: npt.NDArray) -> npt.NDArray:
         """R^-1 r for r on U (vector or columns)."""
         z = r.copy()
-        z[self.at_0] = self.solve_0(r[self.at_0])
+        z[self.at_0] = scipy.linalg.lu_solve(
+            self.lu, r[self.at_0].astype(np.float32), check_finite=False
+        )
         if len(self.at_closed):
             z_0 = z[self.at_0]
             Dz_0 = (self.D_0 @ z_0.reshape(len(self.D_0), 3, -1)).reshape(z_0.shape)
@@ -201,7 +148,7 @@ class _Update:
         r_U[self.at_active] = r
         z = self._reference_solve(r_U)
         z -= self.W @ scipy.linalg.lu_solve(
-            self.capacitance, self.dV.T @ z[self.at_changed], check_finite=False
+            self.capacitance, z[self.at_changed], check_finite=False
         )
         return z[self.at_active]
 
@@ -245,7 +192,7 @@ class TractionJacobian:
         self._shares = Shares(comm, 0)  # of the entries of G's products
         self._block: tuple[bytes, npt.NDArray] | None = None  # G_aa^T of the last active set
         self._work = Workspace()  # of G_aa^T and of the factors
-        self._kept: _Factors | None = None
+        self._lu = None
         self._lu_points = np.zeros(0, dtype=np.int64)  # a_0 and D_0 of the kept factors
         self._lu_D = np.zeros((0, 3, 3))
         # the factors updated to an active set and changed points
@@ -271,7 +218,7 @@ class TractionJacobian:
     def reset(self) -> None:
         """Other points: no G and no factors (the counters are kept)."""
         self.set_compliance(np.zeros((0, 0)))
-        self._kept = None
+        self._lu = None
 
     def times(self, v: npt.NDArray, active: npt.NDArray) -> npt.NDArray:
         """G v (3 np) for v zero off the ``active`` points."""
@@ -311,42 +258,54 @@ class TractionJacobian:
             self._block = (key, np.take(picked, cols, axis=1, out=block, mode="clip"))
         return self._block[1]
 
-    def _jacobian(self, active: npt.NDArray, D: npt.NDArray, rows: npt.NDArray) -> npt.NDArray:
-        """J = I + G_aa D (Fortran order) from ``rows`` = G_aa^T (C order)."""
+    def _jacobian(
+        self, active: npt.NDArray, D: npt.NDArray, rows: npt.NDArray, out: npt.NDArray | None = None
+    ) -> npt.NDArray:
+        """J = I + G_aa D (Fortran order) from ``rows`` = G_aa^T (C order), in their precision
+        (in ``out``, n x n in C order, where given)."""
         n = rows.shape[0]
         # J^T = D^T G_aa^T block row by block row; J in Fortran order is its transpose
-        J = np.matmul(D.transpose(0, 2, 1), rows.reshape(len(active), 3, n)).reshape(n, n).T
+        DT = D.transpose(0, 2, 1).astype(rows.dtype)
+        blocks = None if out is None else out.reshape(len(active), 3, n)
+        J = np.matmul(DT, rows.reshape(len(active), 3, n), out=blocks).reshape(n, n).T
         J[np.diag_indices_from(J)] += 1.0
         return J
 
     def _factorise(self, active: npt.NDArray, D: npt.NDArray) -> None:
-        """Single-precision factors of J = I + G_aa D (in reduced form)."""
-        self._kept = _Factors(self._block_rows(active), D, self._work)
+        """Single-precision LU factors of J = I + G_aa D."""
+        rows = self._block_rows(active)
+        n = rows.shape[0]
+        # in the memory of the factors it replaces
+        J = self._jacobian(active, D, rows, self._work.get("factors", (n, n), np.float32))
+        _flush_subnormal(J.T)
+        self._lu = scipy.linalg.lu_factor(J, overwrite_a=True, check_finite=False)
         self._lu_points, self._lu_D = active.copy(), D.copy()
         self._update = None
         self.factorizations += 1
         count("traction factorisations")
 
+    def _factors_solve(self, r: npt.NDArray) -> npt.NDArray:
+        """J_0^-1 r with the kept factors."""
+        return scipy.linalg.lu_solve(self._lu, r.astype(np.float32), check_finite=False)
+
     def _factors(self, active: npt.NDArray, D: npt.NDArray) -> Solve | None:
         """The preconditioner's solve from the kept factors for the active set, or None where
         there are none or too many points changed."""
-        if self._kept is None:
+        if self._lu is None:
             return None
-        kept_solve, reference = self._kept.solve, self._lu_points
+        lu, reference = self._lu, self._lu_points
         kept, in_active, in_reference = np.intersect1d(
             active, reference, assume_unique=True, return_indices=True
         )
         moved = np.linalg.norm(D[in_active] - self._lu_D[in_reference], axis=(1, 2)) > self.turn
         changed = np.union1d(np.setxor1d(active, reference, assume_unique=True), kept[moved])
         if not len(changed):
-            return kept_solve
+            return self._factors_solve
         if len(changed) > self.max_update * len(reference):
             return None
         key = (active.tobytes(), changed.tobytes())
         if self._update is None or self._update[0] != key:
-            update = _Update(
-                kept_solve, reference, self._lu_D, active, D, changed, self._GT32, self.comm
-            )
+            update = _Update(lu, reference, self._lu_D, active, D, changed, self._GT32, self.comm)
             self._update = (key, update)
             self.updates += 1
             count("traction updates")
@@ -393,8 +352,7 @@ class TractionJacobian:
             if converged:
                 return dy
         self._factorise(active, D)
-        assert self._kept is not None
-        dy, converged = self._krylov(active, D, r, self._kept.solve)
+        dy, converged = self._krylov(active, D, r, self._factors_solve)
         if not converged:  # J too ill-conditioned for single-precision factors
             cols = _dofs(active)
             J = self._jacobian(active, D, self._GT[np.ix_(cols, cols)])
