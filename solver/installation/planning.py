@@ -31,6 +31,14 @@ from solver.installation.settings import DampingSettings, TimeSettings
 ALGORITHMIC_SHARE = (
     0.1  #: largest algorithmic damping of a vibration stage / physical damping ratio [-]
 )
+#: algorithmic damping ratios [-] up to this are round-off of the closed form (a conservative
+#: scheme, Newmark or rho_inf = 1, gives about 1e-15), not damping
+ROUND_OFF = 1e-12
+
+
+def damps_resonance(algorithmic: float, physical: float) -> bool:
+    """Whether an algorithmic damping ratio exceeds ``ALGORITHMIC_SHARE`` of the physical one."""
+    return algorithmic > ALGORITHMIC_SHARE * physical + ROUND_OFF
 
 
 @dataclass
@@ -54,9 +62,8 @@ class StagePlan:
     physical_damping: float = 0.0
 
 
-def _smallest_passing(values: Sequence, passes: Callable) -> str:
-    found = [v for v in values if passes(v)]
-    return f"{found[0]:g}" if found else "none"
+def _smallest_passing(values: Sequence, passes: Callable) -> float | None:
+    return next((v for v in values if passes(v)), None)
 
 
 def check_time_scheme(time: TimeSettings, damping: DampingSettings) -> None:
@@ -71,8 +78,7 @@ def check_time_scheme(time: TimeSettings, damping: DampingSettings) -> None:
             "'newmark' or 'generalised-alpha'"
         )
     xi = accuracy(scheme, time.steps_per_period).damping_ratio
-    limit = ALGORITHMIC_SHARE * damping.zeta
-    if xi <= limit:
+    if not damps_resonance(xi, damping.zeta):
         return
 
     def damping_at(rho: float, n: int) -> float:
@@ -80,18 +86,21 @@ def check_time_scheme(time: TimeSettings, damping: DampingSettings) -> None:
 
     rho = _smallest_passing(
         np.round(np.arange(0.0, 1.0001, 0.05), 2),
-        lambda r: damping_at(r, time.steps_per_period) <= limit,
+        lambda r: not damps_resonance(damping_at(r, time.steps_per_period), damping.zeta),
     )
     steps = _smallest_passing(
-        range(time.steps_per_period, 257), lambda n: damping_at(time.rho_inf, n) <= limit
+        range(time.steps_per_period, 257),
+        lambda n: not damps_resonance(damping_at(time.rho_inf, n), damping.zeta),
     )
+    remedies = [f"rho_inf >= {rho:g} at this step"] if rho is not None else []
+    if steps is not None:
+        remedies.append(f"steps_per_period >= {steps} at this rho_inf")
     raise ValueError(
         f"[time] {time.scheme} (rho_inf = {time.rho_inf:g}) at {time.steps_per_period} steps per period "
         f"damps a resonance numerically by {100 * xi:.3g} % of critical, more than "
         f"{100 * ALGORITHMIC_SHARE:g} % of the smallest physical damping ratio of the vibration stages "
         f"([damping] zeta = {100 * damping.zeta:g} %): the time scheme, not the structure, would limit "
-        f"the resonant response. Use rho_inf >= {rho} at this step, or steps_per_period >= {steps} "
-        "at this rho_inf (docs/dynamics.md)"
+        f"the resonant response. Use {' or '.join(remedies)} (docs/dynamics.md)"
     )
 
 
@@ -157,7 +166,7 @@ def plan_vibration(
             plan.period_error = fidelity.period_error
             plan.physical_damping = float(damping_ratio(f_max))
             plan.natural_frequency_Hz = e.frequency_Hz if e is not None and e.mode > 0 else 0.0
-            if plan.algorithmic_damping > ALGORITHMIC_SHARE * plan.physical_damping:
+            if damps_resonance(plan.algorithmic_damping, plan.physical_damping):
                 raise ValueError(
                     f"{plan.name} at {f_max:.2f} Hz: the time scheme damps it numerically by "
                     f"{100 * plan.algorithmic_damping:.3g} % of critical, more than "
@@ -170,7 +179,9 @@ def plan_vibration(
 
 
 def format_fidelity(plan: StagePlan) -> str:
-    """One line: forcing and natural frequency, step, algorithmic damping and period error."""
+    """One line: forcing and natural frequency, step, algorithmic damping and period error
+    (a conservative scheme's round-off damping, possibly -0.0, printed as 0: max returns its
+    first argument on a tie)."""
     natural = (
         f" = time-discrete natural frequency of the {plan.natural_frequency_Hz:.2f} Hz mode"
         if plan.natural_frequency_Hz
@@ -179,6 +190,6 @@ def format_fidelity(plan: StagePlan) -> str:
     return (
         f"{plan.name}: {plan.frequency_Hz:.2f} Hz{natural}; dt {1e6 * plan.dt_s:.1f} us "
         f"({plan.steps_per_period:.1f} steps per period), algorithmic damping "
-        f"{100 * max(plan.algorithmic_damping, 0.0):.4f} % (physical {100 * plan.physical_damping:.3g} %), "
+        f"{100 * max(0.0, plan.algorithmic_damping):.4f} % (physical {100 * plan.physical_damping:.3g} %), "
         f"period error {100 * plan.period_error:+.3f} %"
     )

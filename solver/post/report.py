@@ -185,7 +185,7 @@ def format_stage(s: dict) -> str:
         )
         line += (
             f"\n{'':>14}{s['steps_per_period']:.1f} steps/period{natural}: algorithmic damping "
-            f"{100 * max(s['algorithmic_damping'], 0.0):.4f} % (physical {100 * s['physical_damping']:.3g} %), "
+            f"{100 * max(0.0, s['algorithmic_damping']):.4f} % (physical {100 * s['physical_damping']:.3g} %), "
             f"period error {100 * s['period_error']:+.3f} %"
         )
     return line

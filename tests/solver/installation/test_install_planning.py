@@ -38,6 +38,17 @@ def test_scheme_check_refuses_numerical_damping_of_resonance():
     check_time_scheme(TimeSettings(scheme="newmark", steps_per_period=4), ZETA)
 
 
+def test_undamped_structure_admits_only_conservative_schemes():
+    """zeta = 0: Newmark and rho_inf = 1 pass (their algorithmic damping is round-off), any
+    rho_inf < 1 is refused at every step, with rho_inf = 1 as the only remedy named."""
+    undamped = DampingSettings(zeta=0.0)
+    check_time_scheme(TimeSettings(scheme="newmark", steps_per_period=4), undamped)
+    check_time_scheme(TimeSettings(rho_inf=1.0, steps_per_period=4), undamped)
+    with pytest.raises(ValueError, match=r"zeta = 0 %.*Use rho_inf >= 1 at this step \(") as err:
+        check_time_scheme(TimeSettings(rho_inf=0.7, steps_per_period=16), undamped)
+    assert "steps_per_period >=" not in str(err.value)
+
+
 def test_suggested_settings_pass_and_are_the_smallest():
     with pytest.raises(ValueError) as err:
         check_time_scheme(TimeSettings(rho_inf=0.0, steps_per_period=16), ZETA)
