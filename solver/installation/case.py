@@ -122,6 +122,13 @@ class InstallationCase:
                 )
             check_time_scheme(settings["time"], settings["damping"])
             sw, smallest = settings["self_weight"], settings["time"].dt_min_fraction
+            if sw.event_dt_s and settings["contact"].lu_solver == "superlu_dist":
+                raise ValueError(
+                    '[contact] lu_solver = "superlu_dist" with event steps ([self_weight] '
+                    f"event_dt_s = {sw.event_dt_s} s): SuperLU_DIST crashes in the first "
+                    "vibration stage after the event steps' operator is freed (docs/install.md, "
+                    'design decisions). Use lu_solver = "mumps" or "auto", or event_dt_s = 0'
+                )
             if sw.event_dt_s:
                 try:
                     check_event_step(sw.dt_s, sw.event_dt_s, smallest * sw.dt_s)

@@ -99,19 +99,21 @@ class JointModel:
         return rows
 
 
-def _lu_package(choice: str, comm: MPI.Comm) -> str:
-    """The PETSc LU package of ``[contact] lu_solver`` ("auto": MUMPS on one rank, SuperLU_DIST,
-    which repeats its arithmetic, on several if PETSc has it)."""
+def _lu_package(case: InstallationCase, comm: MPI.Comm) -> str:
+    """The PETSc LU package of ``[contact] lu_solver`` ("auto": SuperLU_DIST, which repeats its
+    arithmetic, on several ranks if PETSc has it and the self-weight stage takes no event steps,
+    with which SuperLU_DIST crashes (``InstallationCase.from_dict``); MUMPS otherwise)."""
+    choice = case.contact.lu_solver
     if choice != "auto":
         return choice
     several = comm.size > 1 and PETSc.Sys.hasExternalPackage("superlu_dist")
-    return "superlu_dist" if several else "mumps"
+    return "superlu_dist" if several and not case.self_weight.event_dt_s else "mumps"
 
 
 def _newton_options(case: InstallationCase, comm: MPI.Comm) -> dict[str, Any]:
     """The options of the case's contact solver ([contact])."""
     c = case.contact
-    options = {"max_iterations": c.max_iterations, "lu_solver": _lu_package(c.lu_solver, comm)}
+    options = {"max_iterations": c.max_iterations, "lu_solver": _lu_package(case, comm)}
     if c.solver == "points":
         return options | {"candidate_gap": c.candidate_gap}
     return options | {

@@ -48,7 +48,8 @@ class ContactSettings:
     max_gap_change: float = 0.0  #: gap-limited Newton steps [m] (ContactNewtonSolver); 0: off
     #: sparse LU of the Newton corrections: "mumps" (faster), "superlu_dist" (bitwise repeatable on
     #: several ranks, where MUMPS's factors vary at round-off from run to run, which stick-slip
-    #: amplifies), or "auto": MUMPS on one rank, SuperLU_DIST on several
+    #: amplifies; not with event steps in the self-weight stage), or "auto": MUMPS on one rank,
+    #: SuperLU_DIST on several where it may run
     lu_solver: str = "auto"
     #: Newton on the contact zone with the linear bulk condensed exactly (solver.dynamics.condensation):
     #: cheaper steps, plus |interface| bulk solves whenever the step size changes

@@ -54,6 +54,8 @@ def test_presets_are_valid_installation_cases():
         ("time.steps_per_period=2", ["steps_per_period"]),
         ("contact.slave=MP_CONTACT", ["slave and master must differ"]),
         ("contact.lu_solver=umfpack", ["lu_solver", "superlu_dist"]),
+        ("contact.lu_solver=superlu_dist", ["superlu_dist", "event_dt_s = 0.001 s", "mumps"]),
+        ("contact.lu_solver=superlu_dist self_weight.event_dt_s=0", None),
         ("contact.condense_bulk=yes", ["condense_bulk", "true or false"]),
         ('contact.solver="newton"', ["solver", "zone", "points"]),
         ("contact.candidate_gap=-1e-6", ["candidate_gap"]),

@@ -3,8 +3,12 @@
 The self-weight ramp of the tiny joint (cases/tiny.toml, 6 steps) runs for each combination of
 ``lu_solver`` ("auto", "mumps", "superlu_dist") and ``condense_bulk``: every step converges
 without a cut, and the settlement equals that of MUMPS on the full system to the Newton
-tolerance (the same discrete problem, solved by other factorisations). Serially and on 2 ranks
-(SuperLU_DIST on 2 ranks with the condensed bulk once aborted the process).
+tolerance (the same discrete problem, solved by other factorisations). The tiny joint's whole
+run (self-weight, modal and vibration stages) with SuperLU_DIST equals the one with MUMPS.
+"auto" takes SuperLU_DIST on several ranks only where the self-weight stage has no event steps
+(with them SuperLU_DIST crashed in the first vibration stage; such cases are refused,
+test_install_errors.py). Serially and on 2 ranks (SuperLU_DIST on 2 ranks with the condensed
+bulk once aborted the process).
 """
 
 import pytest
@@ -13,6 +17,7 @@ from petsc4py import PETSc
 
 from solver.dynamics.time_loop import run
 from solver.installation.model import set_up_joint_model
+from solver.installation.runner import Installation
 
 pytestmark = pytest.mark.mpi
 
@@ -57,3 +62,29 @@ def test_lu_choice_with_and_without_condensation(tiny_case, reference, lu, conde
     assert len(iterations) == 6
     assert reference > 0
     assert settled == pytest.approx(reference, rel=1e-6)
+
+
+def test_whole_run_with_superlu_dist(tiny_case, shared_dir):
+    if not PETSc.Sys.hasExternalPackage("superlu_dist"):
+        pytest.skip("this PETSc has no superlu_dist")
+    settled = {}
+    for lu in ("mumps", "superlu_dist"):
+        case = tiny_case(f"contact.lu_solver={lu}")
+        runner = Installation(MPI.COMM_WORLD, case, shared_dir(f"whole_{lu}"), progress=False)
+        summary = runner.run()
+        assert sum(row["step_cuts"] for row in runner.history) == 0
+        assert runner.stages[-1]["stage"] > 0  # through the vibration stages
+        settled[lu] = summary["total_settlement_mm"]
+    print(f"\nwhole run: settlement {settled} mm")
+    assert settled["mumps"] > 0
+    assert settled["superlu_dist"] == pytest.approx(settled["mumps"], rel=1e-6)
+
+
+@pytest.mark.parametrize("event_dt_s", ["0", "0.001"])
+def test_auto_takes_superlu_dist_only_without_event_steps(tiny_case, event_dt_s):
+    model = set_up_joint_model(
+        MPI.COMM_WORLD, tiny_case("contact.lu_solver=auto", f"self_weight.event_dt_s={event_dt_s}")
+    )
+    several = MPI.COMM_WORLD.size > 1 and PETSc.Sys.hasExternalPackage("superlu_dist")
+    expected = "superlu_dist" if several and event_dt_s == "0" else "mumps"
+    assert model.problem.newton_options["lu_solver"] == expected
