@@ -21,7 +21,7 @@ from mpi4py import MPI
 import dolfinx
 from common.material import Material
 from geometry import tags
-from geometry.contact_map import plot_contact_map, rigid_contact_map
+from geometry.contact_map import plot_contact_map, rigid_contact_map, tp_placement
 from geometry.imperfections import ovality, read_imperfection
 from geometry.mesh import create_joint_mesh, write_paraview
 from geometry.parameters import JointGeometry, geometry_from_case
@@ -89,6 +89,7 @@ def main(argv: list[str] | None = None) -> int:
             if "tp" in imperfections:
                 raise ValueError("--tp-ovality-mm and --imperfection tp=... exclude each other")
             imperfections["tp"] = ovality(args.tp_ovality_mm * 1e-3)
+        tp_placement(joint, imperfections)  # deviations the cones cannot hold: before any output
         out = cli.prepare_output(comm, args.output)
     except ValueError as e:
         return cli.fail(comm, str(e))

@@ -42,6 +42,12 @@ WITHOUT_PROGRESS_BAR = ("joint_geometry", "modal", "lumped")
         ("sweep", ["--set", "sweep.kind='chirp'"], ["[sweep]", "'steps' or 'ramp'"]),
         ("modal", ["--quick", "--case", "full_scale"], ["--quick is --case modal_quick"]),
         ("joint_geometry", ["--case", "no_such_case"], ["no_such_case", "presets"]),
+        ("joint_geometry", ["--quick", "--tp-ovality-mm", "100"], ["imperfections too large"]),
+        (
+            "install",
+            ["--quick", "--set", 'contact.lu_solver="superlu_dist"'],
+            ["superlu_dist", "event_dt_s", "mumps"],
+        ),
         ("modal", ["--set", "mesh.n_circumferential=10"], ["scaled.toml: [mesh]", "multiple of 4"]),
     ],
 )
