@@ -113,7 +113,11 @@ def _lu_package(case: InstallationCase, comm: MPI.Comm) -> str:
 def _newton_options(case: InstallationCase, comm: MPI.Comm) -> dict[str, Any]:
     """The options of the case's contact solver ([contact])."""
     c = case.contact
-    options = {"max_iterations": c.max_iterations, "lu_solver": _lu_package(case, comm)}
+    options = {
+        "max_iterations": c.max_iterations,
+        "rtol": c.newton_rtol,
+        "lu_solver": _lu_package(case, comm),
+    }
     if c.solver == "points":
         return options | {"candidate_gap": c.candidate_gap}
     return options | {

@@ -42,6 +42,9 @@ class ContactSettings:
     #: points (docs/contact.md)
     quadrature_degree: int = 0
     max_iterations: int = 30  #: Newton iterations per step before the step is cut
+    #: a step has converged when ||R|| <= newton_rtol max(||R_0||, ||b||) [N] (R: the residual
+    #: forces, b: the step's load with its inertia terms; docs/dynamics.md, time loop)
+    newton_rtol: float = 1e-7
     max_backtracks: int = (
         6  #: Newton line-search halvings (solver.dynamics.newton.ContactNewtonSolver)
     )
@@ -67,6 +70,8 @@ class ContactSettings:
             raise ValueError(f"condense_bulk must be true or false, got {self.condense_bulk!r}")
         if not (isinstance(self.max_iterations, int) and self.max_iterations >= 1):
             raise ValueError(f"max_iterations must be an integer >= 1, got {self.max_iterations!r}")
+        if not 0 < self.newton_rtol < 1:
+            raise ValueError(f"newton_rtol must lie in (0, 1), got {self.newton_rtol!r}")
         if not (isinstance(self.max_backtracks, int) and self.max_backtracks >= 0):
             raise ValueError(f"max_backtracks must be an integer >= 0, got {self.max_backtracks!r}")
         _check_choice("slave", self.slave, SURFACES)

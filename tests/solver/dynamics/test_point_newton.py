@@ -17,7 +17,8 @@
 - The installation steps of the quick frictional joint (self-weight ramp, then eccentric
   vibration steps) with ``[contact] solver = "points"`` against the generalized Newton on the
   zone, with the friction coefficient lagged by a step and at the step's own slip speed: the
-  same discrete problem, so the same settlement and displacement to the Newton tolerance.
+  same discrete problem, so the same settlement and displacement to the Newton tolerance; and
+  the outer tolerance of the default case against a tight one.
 
 Serially and on 2 ranks.
 """
@@ -30,6 +31,7 @@ import scipy.linalg
 from mpi4py import MPI
 from petsc4py import PETSc
 
+from common.case import read_case
 from solver.contact.model import Status
 from solver.dynamics.compliance import ContactCompliance
 from solver.dynamics.loads import Schedule
@@ -37,6 +39,7 @@ from solver.dynamics.relaxation import CoefficientRelaxation
 from solver.dynamics.tractions import solve_tractions, traction_residual
 from solver.dynamics.traction_jacobian import TractionJacobian
 from solver.dynamics.time_loop import run
+from solver.installation.case import InstallationCase
 from solver.installation.model import attach_vibration, set_up_joint_model
 
 pytestmark = pytest.mark.mpi
@@ -359,3 +362,34 @@ def test_points_solver_matches_zone_newton(quick_case):
         assert np.linalg.norm(points[1] - zone[1]) <= rtol * np.linalg.norm(zone[1])
         settlement[lagged] = points[0]
     assert abs(settlement["true"] - settlement["false"]) > 5e-4 * settlement["true"]
+
+
+def test_the_default_tolerance_keeps_the_settlement(quick_case):
+    """The outer tolerance of the default case (cases/scaled.toml, ``[contact] newton_rtol``)
+    against a tight one (1e-9), with mu at the step's own slip speed (d_c = 5 s/m) on the quick
+    frictional joint's ramp and 8 eccentric steps: the settlement and the displacement within
+    1e-3 relative, a thirtieth of the time step's error at 16 steps per period (3.5 %,
+    docs/dynamics.md, "Convergence in the time step"), in fewer Newton iterations."""
+    default = InstallationCase.from_dict(read_case("scaled")).contact.newton_rtol
+    runs = {}
+    for rtol in (default, 1e-9):
+        case = quick_case(
+            "contact.lu_solver=mumps",
+            "time.steps_per_period=16",
+            "friction.d_c=5",
+            "contact.lagged_friction=false",
+            'contact.solver="points"',
+            f"contact.newton_rtol={rtol}",
+        )
+        runs[rtol] = _installation_steps(case, 8)
+    (s, u, its), (s_tight, u_tight, its_tight) = runs[default], runs[1e-9]
+    print(
+        f"\nnewton_rtol {default:g}: settlement {s:.9f} mm in {sum(its)} Newton iterations; "
+        f"1e-9: {s_tight:.9f} mm in {sum(its_tight)} (relative difference "
+        f"{abs(s - s_tight) / s_tight:.1e}, displacement "
+        f"{np.linalg.norm(u - u_tight) / np.linalg.norm(u_tight):.1e})"
+    )
+    assert default > 1e-9 and s_tight > 0.1
+    assert s == pytest.approx(s_tight, rel=1e-3)
+    assert np.linalg.norm(u - u_tight) <= 1e-3 * np.linalg.norm(u_tight)
+    assert sum(its) < sum(its_tight)

@@ -57,6 +57,8 @@ def test_presets_are_valid_installation_cases():
         ("contact.lu_solver=superlu_dist", ["superlu_dist", "event_dt_s = 0.001 s", "mumps"]),
         ("contact.lu_solver=superlu_dist self_weight.event_dt_s=0", None),
         ("contact.condense_bulk=yes", ["condense_bulk", "true or false"]),
+        ("contact.newton_rtol=0", ["newton_rtol", "(0, 1)"]),
+        ("contact.newton_rtol=1.5", ["newton_rtol", "(0, 1)"]),
         ('contact.solver="newton"', ["solver", "zone", "points"]),
         ("contact.candidate_gap=-1e-6", ["candidate_gap"]),
         ("contact.quadrature_degree=-1", ["quadrature_degree"]),
