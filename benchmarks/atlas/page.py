@@ -42,8 +42,9 @@ best mode and the control, 0.05 s each), the friction half of S6, S8 and S5's re
 end of the ramp a pull between the pull-out forces with mu_d and with mu_s minus 3.6 kN alone,
 then with 3.6 kN at the best mode) run in the test suite (`make test`,
 `tests/solver/installation/test_install_scenarios.py`, on 2 ranks; the serial run skips them) on
-the default joint with the stepping of `cases/scaled_lagged.toml`, an 80 mm contact zone and the
-self-weight ramped over 1 s (`cases/suite.toml`). In
+the default joint with its outer Newton tolerance and the stepping of
+`cases/scaled_lagged.toml`, an 80 mm contact zone and the self-weight ramped over 1 s
+(`cases/suite.toml`). In
 the 2-rank run of `make test` from a fresh clone (its slowest tests are listed in
 `build/Testing/Temporary/LastTest.log`) the ramp with its two modal analyses takes 1.6 min, the
 low-friction ramp 0.7 min, the two-stage S2 4.1 min and S5's release 3.8 min. What they measure

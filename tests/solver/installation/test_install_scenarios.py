@@ -4,7 +4,8 @@ default joint.
 
 cases/suite.toml: the joint and contact solver of the default run (cases/scaled.toml: 48
 elements around, 80 mm axially, 10 mm axially in the contact zone, P2, its ten lowest
-frequencies within 3 % of the converged ones) with mu lagged by a step (cases/scaled_lagged.toml),
+frequencies within 3 % of the converged ones) and its outer Newton tolerance (1e-5), with mu
+lagged by a step (cases/scaled_lagged.toml),
 an 80 mm contact zone and the self-weight of
 10 kN ramped over 1 s (half the §3 ramp time) in 10 ms steps, which resolve the TP's axial
 oscillation on the wedge so that the TP moves in stick-slip steps rather than sliding steadily.
