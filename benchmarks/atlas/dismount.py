@@ -31,12 +31,12 @@ from solver.installation import checkpoint
 from solver.installation.dismount import SEPARATION_FRACTION, pull_out_force
 from solver.installation.frequencies import Excitation
 from solver.installation.model import JointModel, attach_vibration
-from solver.installation.planning import compensate
+from solver.installation.planning import compensate, stage_step
 from solver.installation.settings import StaticForceSettings
 
 __all__ = ["dismount_branches", "dismount_runs", "lift_rate", "released", "separated"]
 
-CHUNKS = 10  #: a vibration branch stops at the first of these chunks that ends released
+CHUNKS = 10  #: a vibration branch stops at the first of these chunks (whole steps) that ends released
 
 
 def lift_rate(rows: list) -> float:
@@ -171,11 +171,14 @@ def dismount_branches(
                 model, Schedule([Stage(duration_s, e.forcing_Hz, force_N)], start_s=start)
             )
             problem.set_scheme(scheme)
+            # the step compensate() drove the mode for; chunks of whole steps (a partial step
+            # would be another step size, with its own operator and contact set-up)
+            dt = stage_step(duration_s, e.forcing_Hz, steps)
+            n_steps = round(duration_s / dt)
+            ends = sorted({round(k * n_steps / CHUNKS) for k in range(1, CHUNKS + 1)} - {0})
             branch = [joint_state(model)]
-            for k in range(1, CHUNKS + 1):
-                advance(
-                    model, start + k * duration_s / CHUNKS, 1.0 / (e.forcing_Hz * steps), branch
-                )
+            for end in ends:
+                advance(model, start + end * dt, dt, branch)
                 if released(branch, n0, slip_rate):
                     break
             branches[name] = {
