@@ -36,7 +36,7 @@ from solver.installation.settings import StaticForceSettings
 
 __all__ = ["dismount_branches", "dismount_runs", "lift_rate", "released", "separated"]
 
-CHUNKS = 10  #: a vibration branch stops at the first of these chunks (whole steps) that ends released
+CHUNKS = 10  #: a vibration branch stops at the first of these chunks of steps that ends released
 
 
 def lift_rate(rows: list) -> float:
