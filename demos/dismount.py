@@ -14,7 +14,7 @@ whose ten lowest frequencies are within 3 % of the converged ones: docs/install.
 "Discretisation") and the sequence of the case's [dismount] table (``DismountPlan``'s
 defaults, the option values below; each option sets its entry, --set dismount.KEY=VALUE
 too). After the self-weight stage alone this joint is held by a contact normal force of about
-21 kN, so its rigid Coulomb pull-out force N (mu cos(alpha) - sin(alpha)) is 7.93-10.01 kN
+21 kN, so its rigid Coulomb pull-out force N (mu cos(alpha) - sin(alpha)) is 7.91-9.98 kN
 (printed; docs/scenarios.md, S5): the default pull of 6 kN lies below it, a pull in
 docs/physics.md §3's rig range (10-40 kN, e.g. --pull 20e3) frees this joint without
 vibration. --quick: --case dismount_quick (the tiny joint with the landing contact settings)
