@@ -21,8 +21,8 @@ oscillation on the wedge so that the TP moves in stick-slip steps rather than sl
 * §5.2 (the atlas's S2 in its two-stage form, benchmarks/atlas/selectivity.py): from the
   settled joint, a lead-in at the control frequency, then the control and the best-ranked mode
   for the same time each; the mode settles at least 5 times as fast over its second half
-  (three stages of 0.05 s, each with its own set-up of the contact solver: with S5 the file's
-  most costly tests; ``mpirun -n 2 python -m mpi4py -m pytest -s --durations=0`` on this file
+  (three stages of 0.05 s, each with its own set-up of the contact solver: the file's most
+  costly test; ``mpirun -n 2 python -m mpi4py -m pytest -s --durations=0`` on this file
   prints the times).
 * §5.5 (the atlas's S5, benchmarks/atlas/dismount.py, its modal branch): from the settled
   joint, a pull between the rigid Coulomb pull-out forces with mu_d and with mu_s minus the
