@@ -17,8 +17,12 @@ amplifies to 5e-8 relative in the settlement, beyond the 1e-8 a resumed run must
 PETSc's plain loops are deterministic; they are used unless the user's PETSc options
 say otherwise (docs/contact.md, section 6).
 
-BLAS threads: one per rank (see below).
+BLAS threads: one per rank; freed memory: kept in the process (both below).
 """
+
+import ctypes
+import ctypes.util
+import os
 
 try:  # PyPI wheel
     import dolfinx_solver  # noqa: F401
@@ -43,3 +47,29 @@ import scipy.linalg  # noqa: E402, F401
 import threadpoolctl  # noqa: E402
 
 threadpoolctl.threadpool_limits(1, "blas")
+
+
+# Freed memory: kept in the process. glibc serves allocations above 32 MB with mmap and returns
+# them to the kernel when freed; on virtual machines that hand freed guest pages back to the host
+# (virtio free page reporting, as on the machines the docs' figures come from) the next first
+# touch of such pages costs about 3.5-7 s per GB (docs/install.md, "Cost"). The contact
+# solver's dense blocks and the factorisations of every stage (a new time step) are such
+# allocations, so they are taken from the heap, which is not trimmed: later stages reuse its
+# pages. Not with other C libraries, nor where the user set glibc's malloc options.
+_M_TRIM_THRESHOLD, _M_MMAP_MAX = -1, -4
+
+
+def _keep_freed_memory() -> bool:
+    """Large allocations from the untrimmed heap (glibc's mallopt); False where not applied."""
+    if any(name in os.environ for name in ("MALLOC_MMAP_MAX_", "MALLOC_TRIM_THRESHOLD_")):
+        return False
+    if "glibc.malloc." in os.environ.get("GLIBC_TUNABLES", ""):
+        return False
+    libc_name = ctypes.util.find_library("c")
+    mallopt = getattr(ctypes.CDLL(libc_name), "mallopt", None) if libc_name else None
+    if mallopt is None:
+        return False
+    return bool(mallopt(_M_MMAP_MAX, 0)) and bool(mallopt(_M_TRIM_THRESHOLD, 2**31 - 1))
+
+
+KEEPS_FREED_MEMORY = _keep_freed_memory()  #: whether freed memory stays in the process
