@@ -31,7 +31,7 @@ from petsc4py import PETSc
 from common.timing import timed
 from solver.contact.model import PointOperators
 from solver.dynamics.linear_algebra import direct_solver, solve_columns
-from solver.dynamics.workspace import GrowingMatrix, Workspace
+from solver.dynamics.workspace import GrowingMatrix, Workspace, transpose
 
 __all__ = ["ContactCompliance", "MasterOperator"]
 
@@ -82,11 +82,11 @@ def _gather_rows(comm: MPI.Comm, local: npt.NDArray) -> npt.NDArray:
 
 def _gather_columns(comm: MPI.Comm, columns: npt.NDArray, out: npt.NDArray) -> npt.NDArray:
     """The columns of a matrix held by the ranks in contiguous shares (rank by rank), on every
-    rank: ``columns`` this rank's share as rows, ``out`` (all columns x rows, C order) receives
-    them; returns the matrix (``out.T``)."""
+    rank, as rows: ``columns`` this rank's share as rows, ``out`` (all columns x rows, C order)
+    receives them and is returned."""
     counts = np.array(comm.allgather(columns.shape[0])) * columns.shape[1]
     comm.Allgatherv(np.ascontiguousarray(columns), (out, counts))  # MPI reads the memory as is
-    return out.T
+    return out
 
 
 def _full_copy(mat: PETSc.Mat) -> PETSc.Mat:
@@ -266,16 +266,18 @@ class ContactCompliance:
         new_points, new_band = slice(m_old, m), slice(nb_old, nb)
         # A^-1 F_N^T W: the new points' columns of Q_ss and R_bs
         EX, _, Xb = self._solve(m_new, F_new)
-        Q_ss[:, new_points], R_bs[:, new_points] = EX, Xb
+        transpose(EX, out=Q_ss[:, new_points])
+        transpose(Xb, out=R_bs[:, new_points])
         if m_old:  # A^-1 E_N^T: the new points' rows of Q_ss and Q_sb (A symmetric)
             _, FX, Xb = self._solve(m_new, E_new)
-            Q_ss[new_points, :m_old] = FX[:m_old].T
-            Q_sb[new_points, :nb_old] = Xb[:nb_old].T
+            Q_ss[new_points, :m_old] = FX[:, :m_old]
+            Q_sb[new_points, :nb_old] = Xb[:, :nb_old]
         if nb > nb_old:  # A^-1 I_bN: the new band's columns of Q_sb and Z_bb, rows of R_bs
             EX, FX, Xb = self._solve(nb - nb_old, None, unit=nb_old)
-            Q_sb[:, new_band], Z_bb[:, new_band] = EX, Xb
-            Z_bb[new_band, :nb_old] = Xb[:nb_old].T
-            R_bs[new_band, :m_old] = FX[:m_old].T
+            transpose(EX, out=Q_sb[:, new_band])
+            transpose(Xb, out=Z_bb[:, new_band])
+            Z_bb[new_band, :nb_old] = Xb[:, :nb_old]
+            R_bs[new_band, :m_old] = FX[:, :m_old]
         E_new.destroy()
         F_new.destroy()
         self._Q_bs = None
@@ -321,9 +323,10 @@ class ContactCompliance:
     ) -> tuple[npt.NDArray, npt.NDArray, npt.NDArray]:
         """For the n solutions X = A^-1 C of the columns of B^T (B given) or of the unit
         vectors of band dofs unit, unit + 1, ... (B None): (E X, F W X) in the blocks' row order
-        and X on the band, in band order, on every rank. Each rank solves a contiguous share of
-        the columns with its full copy of the factors (:meth:`_column_solver`) and the shares
-        are gathered (into kept arrays: the results hold until the next call)."""
+        and X on the band, in band order, on every rank, each transposed (n rows, C order).
+        Each rank solves a contiguous share of the columns with its full copy of the factors
+        (:meth:`_column_solver`) and the shares are gathered (into kept arrays: the results hold
+        until the next call)."""
         share = np.array_split(np.arange(n), self.comm.size)[self.comm.rank]
         first = share[0] if len(share) else 0
         if B is not None:  # B's rows are the columns to solve for, its columns zone dofs
@@ -412,12 +415,12 @@ class ContactCompliance:
         the master operator M_b and the points' weights w / gamma (``PointOperators.weight``,
         gathered) [m^3/Pa]: Q_ss + M_b R_bs + (Q_sb M_b^T + M_b Z_bb M_b^T) W, built as
         G^T = W (M_b Q_sb^T + M_b Z_bb M_b^T) + (Q_ss + M_b R_bs)^T (Z_bb is symmetric)."""
-        Q_bs = self._Q_bs if self._Q_bs is not None else np.ascontiguousarray(self.Q_sb.T)
+        Q_bs = self._Q_bs if self._Q_bs is not None else transpose(self.Q_sb)
         self._Q_bs = Q_bs
         GT = M_b.times(Q_bs)
-        GT += M_b.times(np.ascontiguousarray(M_b.times(self.Z_bb).T))
+        GT += M_b.times(transpose(M_b.times(self.Z_bb)))
         GT *= np.repeat(weight, 3)[:, None]
-        GT += (self.Q_ss + M_b.times(self.R_bs)).T
+        GT += transpose(self.Q_ss + M_b.times(self.R_bs))
         return GT.T
 
     # -- per iteration --------------------------------------------------------------------------

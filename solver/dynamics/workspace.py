@@ -1,15 +1,27 @@
-"""Dense arrays kept from call to call. A fresh array of tens of MB costs a page fault per 4 kB
-page at its first touch, on every call; the inner problem and the compliance blocks of Newton
-on the contact points (``solver.dynamics.traction_jacobian``, ``solver.dynamics.compliance``)
-reuse their memory instead."""
+"""Dense arrays kept from call to call, and their transposed copies. A fresh array of tens of MB
+costs a page fault per 4 kB page at its first touch, on every call; the inner problem and the
+compliance blocks of Newton on the contact points (``solver.dynamics.traction_jacobian``,
+``solver.dynamics.compliance``) reuse their memory instead."""
 
 import numpy as np
 import numpy.typing as npt
 
-__all__ = ["GrowingMatrix", "Workspace"]
+__all__ = ["GrowingMatrix", "Workspace", "transpose"]
 
 #: an array that must grow takes this much more room than asked for
 ROOM = 1.25
+
+
+def transpose(a: npt.NDArray, out: npt.NDArray | None = None, rows: int = 128) -> npt.NDArray:
+    """a^T copied into ``out`` (a new C-order array where not given), ``rows`` rows of a at a
+    time. numpy copies a transposed array element by element in the order of the copy, reading
+    a from a new page at each element: the compliance's 3648 x 4536 products took 0.7 s so, and
+    0.03 s in blocks of 128 rows."""
+    if out is None:
+        out = np.empty(a.shape[::-1], dtype=a.dtype)
+    for start in range(0, a.shape[0], rows):
+        out[:, start : start + rows] = a[start : start + rows].T
+    return out
 
 
 class Workspace:

@@ -1,6 +1,7 @@
 """Kept arrays (``solver.dynamics.workspace``) and shares of a product among the ranks
 (``solver.dynamics.shares``): a growing matrix keeps its entries and zeroes the new ones, within
-its room and beyond it; a workspace array of a name reuses its memory while it fits; the shares
+its room and beyond it; a workspace array of a name reuses its memory while it fits; the blocked
+transposed copy equals a^T, into a new array and into a strided part of another; the shares
 of n entries cover them once, and gathered they give the whole product (or the rows of a matrix)
 on every rank (serially and on 2 ranks)."""
 
@@ -9,7 +10,7 @@ import pytest
 from mpi4py import MPI
 
 from solver.dynamics.shares import Shares
-from solver.dynamics.workspace import GrowingMatrix, Workspace
+from solver.dynamics.workspace import GrowingMatrix, Workspace, transpose
 
 pytestmark = pytest.mark.mpi
 
@@ -39,6 +40,18 @@ def test_workspace_reuses_its_memory():
     assert np.shares_memory(first, smaller) and smaller.shape == (4, 5)
     assert not np.shares_memory(work.get("b", (4, 5)), first)
     assert work.get("a", (4, 5), np.float32).dtype == np.float32
+
+
+@pytest.mark.parametrize("shape", [(0, 3), (1, 1), (127, 5), (300, 257)])
+def test_transpose_copies_the_transposed_array(shape):
+    a = np.random.default_rng(6).normal(size=shape)
+    copy = transpose(a)
+    assert copy.flags.c_contiguous and np.array_equal(copy, a.T)
+    room = np.zeros((shape[1] + 2, shape[0] + 3))
+    transpose(a.astype(np.float32), out=room[1:-1, 2:-1])  # a block of a larger matrix
+    assert np.array_equal(room[1:-1, 2:-1], a.T.astype(np.float32))
+    room[1:-1, 2:-1] = 0.0
+    assert not room.any()  # nothing written outside the block
 
 
 @pytest.mark.parametrize("n", [0, 1, 7, 100])
