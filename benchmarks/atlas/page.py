@@ -47,8 +47,8 @@ the default joint with its outer Newton tolerance and the stepping of
 (`cases/suite.toml`). In
 the 2-rank run of `make test` from a fresh clone (its slowest tests are listed in
 `build/Testing/Temporary/LastTest.log`) the ramp with its two modal analyses takes 2.1 min, the
-low-friction ramp 1.0 min, the two-stage S2 3.7 min and S5's release 1.1 min. What they measure
-(the mode 8.0 times the control's rate; the pull alone lifts the TP 0.4 um, and with the
+low-friction ramp 0.9 min, the two-stage S2 3.3 min and S5's release 0.9 min. What they measure
+(the mode 7.8 times the control's rate; the pull alone lifts the TP 0.4 um, and with the
 vibration it is released 35 ms on) is printed by
 `mpirun -n 2 python -m mpi4py -m pytest -s tests/solver/installation/test_install_scenarios.py`.
 """
