@@ -17,12 +17,19 @@ amplifies to 5e-8 relative in the settlement, beyond the 1e-8 a resumed run must
 PETSc's plain loops are deterministic; they are used unless the user's PETSc options
 say otherwise (docs/contact.md, section 6).
 
-BLAS threads: one per rank; freed memory: kept in the process (both below).
+BLAS threads: one per rank, and OpenBLAS's idle threads asleep at once; freed memory: kept in
+the process (all below).
 """
 
 import ctypes
 import ctypes.util
 import os
+
+# OpenBLAS threads that finish their work spin for about 0.1 s before they sleep. The inner
+# problem's factorisations run on one rank with a thread per rank of the node
+# (``solver.dynamics.node_memory``), and a thread spinning on after one would take the core from
+# the next work of another rank. Read when OpenBLAS loads, so set before NumPy and SciPy load.
+os.environ.setdefault("OPENBLAS_THREAD_TIMEOUT", "4")  # 2^4 cycles
 
 try:  # PyPI wheel
     import dolfinx_solver  # noqa: F401

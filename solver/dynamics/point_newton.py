@@ -407,3 +407,4 @@ class PointNewtonSolver:
 
     def destroy(self) -> None:
         self._drop()
+        self.jacobian.free()

@@ -20,12 +20,14 @@ factors are renewed when more than ``max_update`` of the points changed, or when
 converge in ``max_krylov`` iterations (if it fails with new factors too, a double-precision
 solve). FGMRES (flexible) because a solve in single precision is not exactly linear.
 
-On several ranks every rank holds G and the factors; the products with G (FGMRES's operator, the
-residual's G lambda and the Newton direction's rows off the active set) are computed in
-contiguous shares of their entries, each rank its own, and joined (``solver.dynamics.shares``);
-FGMRES runs on the ranks' shares of its vectors, so that all ranks take the same iterations.
-The columns of a Woodbury update are solved in shares as well; the factorisations and the
-preconditioner's triangular solves are repeated on every rank.
+On several ranks every rank holds G; the products with G (FGMRES's operator, the residual's
+G lambda and the Newton direction's rows off the active set) are computed in contiguous shares
+of their entries, each rank its own, and joined (``solver.dynamics.shares``); FGMRES runs on the
+ranks' shares of its vectors, so that all ranks take the same iterations. The columns of a
+Woodbury update are solved in shares as well. The factors are computed once per node, by its
+first rank with a BLAS thread per rank of the node, in memory that the node's ranks share
+(``solver.dynamics.node_memory``); the preconditioner's triangular solves are repeated on every
+rank.
 """
 
 from collections.abc import Callable
@@ -38,6 +40,7 @@ from mpi4py import MPI
 from petsc4py import PETSc
 
 from common.timing import count
+from solver.dynamics.node_memory import NodeMemory
 from solver.dynamics.shares import Shares
 from solver.dynamics.workspace import Workspace
 
@@ -191,8 +194,9 @@ class TractionJacobian:
         self._GT32: npt.NDArray = np.zeros((0, 0), dtype=np.float32)  # for the Newton directions
         self._shares = Shares(comm, 0)  # of the entries of G's products
         self._block: tuple[bytes, npt.NDArray] | None = None  # G_aa^T of the last active set
-        self._work = Workspace()  # of G_aa^T and of the factors
-        self._lu = None
+        self._work = Workspace()  # of G_aa^T
+        self._node = NodeMemory(comm)  # of the factors
+        self._lu: tuple[npt.NDArray, npt.NDArray] | None = None  # factors and pivots of J_0
         self._lu_points = np.zeros(0, dtype=np.int64)  # a_0 and D_0 of the kept factors
         self._lu_D = np.zeros((0, 3, 3))
         # the factors updated to an active set and changed points
@@ -214,6 +218,12 @@ class TractionJacobian:
         self._shares = Shares(self.comm, G.shape[0])
         self._block = None
         self._update = None
+
+    def free(self) -> None:
+        """Release the factors' shared memory (collective; the object is not used after it)."""
+        self._lu = None
+        self._update = None
+        self._node.free()
 
     def reset(self) -> None:
         """Other points: no G and no factors (the counters are kept)."""
@@ -275,10 +285,22 @@ class TractionJacobian:
         """Single-precision LU factors of J = I + G_aa D."""
         rows = self._block_rows(active)
         n = rows.shape[0]
-        # in the memory of the factors it replaces
-        J = self._jacobian(active, D, rows, self._work.get("factors", (n, n), np.float32))
-        _flush_subnormal(J.T)
-        self._lu = scipy.linalg.lu_factor(J, overwrite_a=True, check_finite=False)
+        node = self._node
+        # once per node, in the memory of the factors it replaces (J^T in C order); the pivots
+        # are each rank's own (SciPy's lu_solve shifts them in place during a solve)
+        factors = node.get("factors", (n, n), np.float32)
+        pivots = np.empty(n, dtype=np.int32)
+        node.begin()
+        if node.writer:
+            J = self._jacobian(active, D, rows, factors)
+            _flush_subnormal(J.T)
+            with node.threads():
+                lu, pivots[:] = scipy.linalg.lu_factor(J, overwrite_a=True, check_finite=False)
+            if not np.shares_memory(lu, factors):
+                J[:] = lu
+        node.end()
+        node.comm.Bcast(pivots)
+        self._lu = (factors.T, pivots)
         self._lu_points, self._lu_D = active.copy(), D.copy()
         self._update = None
         self.factorizations += 1
