@@ -35,24 +35,47 @@ class NodeMemory:
         #: the ranks of this node
         self.comm = cast(MPI.Intracomm, comm.Split_type(MPI.COMM_TYPE_SHARED))
         self.writer = self.comm.rank == 0
-        self._windows: dict[str, tuple[MPI.Win, npt.NDArray]] = {}
+        self._windows: dict[str, tuple[MPI.Win | None, npt.NDArray]] = {}
+        self._private: list[npt.NDArray] = []  # arrays of each rank's own to broadcast at end
 
     def get(self, name: str, shape: tuple[int, ...], dtype: type) -> npt.NDArray:
         """An uninitialised C-order array of this shape, in the memory of the last one of its
-        name where it fits."""
+        name where it fits. Where the node's shared memory has no room for it (``/dev/shm``,
+        where MPI implementations keep it, holds less than twice its size: Docker's default
+        is 64 MB), it is each rank's own and :meth:`end` broadcasts it from the writer."""
         size = int(np.prod(shape))
         kept = self._windows.get(name)
         if kept is None or kept[1].size < size or kept[1].dtype != dtype:
-            if kept is not None:
+            if kept is not None and kept[0] is not None:
                 kept[0].Free()
             length = int(ROOM * size)
-            item = np.dtype(dtype).itemsize
-            window = MPI.Win.Allocate_shared(
-                length * item if self.writer else 0, item, comm=self.comm
-            )
-            memory, _ = window.Shared_query(0)
-            kept = self._windows[name] = (window, np.ndarray(length, dtype, buffer=memory))
-        return kept[1][:size].reshape(shape)
+            kept = self._windows[name] = self._allocate(length, np.dtype(dtype))
+        array = kept[1][:size].reshape(shape)
+        if kept[0] is None and self.comm.size > 1:
+            self._private.append(array)
+        return array
+
+    def _allocate(self, length: int, dtype: np.dtype) -> tuple[MPI.Win | None, npt.NDArray]:
+        """A window of ``length`` entries shared by the node's ranks, or (None, an array of this
+        rank's own) where the node's shared memory has no room for it."""
+        room = self._shared_room() if self.writer else None
+        if self.comm.size == 1 or not self.comm.bcast(
+            room is None or room >= 2 * length * dtype.itemsize
+        ):
+            return None, np.empty(length, dtype)
+        window = MPI.Win.Allocate_shared(
+            length * dtype.itemsize if self.writer else 0, dtype.itemsize, comm=self.comm
+        )
+        memory, _ = window.Shared_query(0)
+        return window, np.ndarray(length, dtype, buffer=memory)
+
+    def _shared_room(self) -> int | None:
+        """Free bytes of ``/dev/shm`` (None where there is none)."""
+        try:
+            stat = os.statvfs("/dev/shm")
+        except OSError:
+            return None
+        return stat.f_bavail * stat.f_frsize
 
     def threads(self) -> threadpoolctl.threadpool_limits:
         """A context in which BLAS takes a thread per rank of the node, at most one per core
@@ -66,12 +89,17 @@ class NodeMemory:
             self.comm.Barrier()
 
     def end(self) -> None:
-        """After the writer wrote: the others, waiting without spinning, may read."""
+        """After the writer wrote: the others, waiting without spinning, may read (the arrays
+        of each rank's own got since the last call are broadcast from the writer)."""
         if self.comm.size > 1:
             idle_wait(self.comm.Ibarrier())
+            for array in self._private:
+                self.comm.Bcast(array)
+        self._private.clear()
 
     def free(self) -> None:
         """Release the windows (the arrays must no longer be used)."""
         for window, _ in self._windows.values():
-            window.Free()
+            if window is not None:
+                window.Free()
         self._windows.clear()

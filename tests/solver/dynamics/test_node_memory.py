@@ -12,9 +12,13 @@ from solver.dynamics.node_memory import NodeMemory
 pytestmark = pytest.mark.mpi
 
 
-def test_every_rank_reads_what_the_writer_wrote():
+@pytest.mark.parametrize("room", [None, 0], ids=["shared", "no room in /dev/shm"])
+def test_every_rank_reads_what_the_writer_wrote(monkeypatch, room):
     """Written by the node's first rank between ``begin`` and ``end``, an array holds the same
-    values on every rank of the node, also after it grew and shrank."""
+    values on every rank of the node, also after it grew and shrank; where the node's shared
+    memory has no room, in arrays of each rank's own."""
+    if room is not None:
+        monkeypatch.setattr(NodeMemory, "_shared_room", lambda self: room)
     memory = NodeMemory(MPI.COMM_WORLD)
     try:
         for n in (3, 50, 20, 400):
