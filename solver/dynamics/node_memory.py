@@ -32,8 +32,9 @@ class NodeMemory:
     first rank (``writer``). Every method is collective over the node's ranks."""
 
     def __init__(self, comm: MPI.Comm):
-        #: the ranks of this node
-        self.comm = cast(MPI.Intracomm, comm.Split_type(MPI.COMM_TYPE_SHARED))
+        self._splits = comm.size > 1  # a communicator of its own, freed by ``free``
+        node = comm.Split_type(MPI.COMM_TYPE_SHARED) if self._splits else comm
+        self.comm = cast(MPI.Intracomm, node)  #: the ranks of this node
         self.writer = self.comm.rank == 0
         self._windows: dict[str, tuple[MPI.Win | None, npt.NDArray]] = {}
         self._private: list[npt.NDArray] = []  # arrays of each rank's own to broadcast at end
@@ -98,8 +99,11 @@ class NodeMemory:
         self._private.clear()
 
     def free(self) -> None:
-        """Release the windows (the arrays must no longer be used)."""
+        """Release the windows and the node's communicator (the object is not used after it)."""
         for window, _ in self._windows.values():
             if window is not None:
                 window.Free()
         self._windows.clear()
+        if self._splits:
+            self.comm.Free()
+            self._splits = False
