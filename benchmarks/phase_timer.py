@@ -29,7 +29,8 @@ record into (``with recording(timer): ...``) and prints what it holds. The phase
 Times are this rank's; ``report`` prints rank 0's, with the number of calls of each phase
 (e.g. factorisations, pairings), and what the tractions phase did
 (``solver.dynamics.traction_jacobian``): single-precision factorisations of the active points'
-Jacobian, Woodbury updates of the kept factors and FGMRES iterations.
+Jacobian (reduced by the kernel of the law's derivative) and their mean rows, Woodbury updates
+of the kept factors and FGMRES iterations.
 """
 
 import resource
@@ -72,10 +73,11 @@ class PhaseTimer(PhaseTimes):
 
     @property
     def inner(self) -> dict[str, int]:
-        """The traction Jacobian's factorisations, Woodbury updates and FGMRES iterations."""
+        """The traction Jacobian's factorisations, their rows in all, Woodbury updates and FGMRES
+        iterations."""
         return {
             key: self.counts.get(f"traction {key}", 0)
-            for key in ("factorisations", "updates", "krylov")
+            for key in ("factorisations", "factor rows", "updates", "krylov")
         }
 
     def triangular_solve_s(self) -> float:
@@ -110,7 +112,8 @@ class PhaseTimer(PhaseTimes):
         if self.traction_iterations:
             inner = self.inner
             say(
-                f"    tractions: {inner['factorisations'] / n:.2f} single-precision factorisations, "
+                f"    tractions: {inner['factorisations'] / n:.2f} single-precision factorisations "
+                f"({inner['factor rows'] / max(inner['factorisations'], 1):.0f} rows on average), "
                 f"{inner['updates'] / n:.2f} Woodbury updates and {inner['krylov'] / n:.1f} FGMRES "
                 f"iterations per step ({inner['krylov'] / self.traction_iterations:.1f} per "
                 "traction iteration)"

@@ -20,6 +20,13 @@ factors are renewed when more than ``max_update`` of the points changed, or when
 converge in ``max_krylov`` iterations (if it fails with new factors too, a double-precision
 solve). FGMRES (flexible) because a solve in single precision is not exactly linear.
 
+The factors are those of J_0 reduced by the kernel of D_0: a slipping point's multiplier does
+not respond to its trial traction changing along the slip direction q (D q = 0), nor does the
+multiplier of a point tied only normally to a tangential change. In each point's basis of the
+directions D_0 keeps and its kernel, J_0 is block lower triangular with the identity on the
+kernel, and only the kept block is factorised (``ReducedFactors``): 3 rows per stuck point, 2
+per slipping point, 1 per point tied only normally.
+
 On several ranks every rank holds G; the products with G (FGMRES's operator, the residual's
 G lambda and the Newton direction's rows off the active set) are computed in contiguous shares
 of their entries, each rank its own, and joined (``solver.dynamics.shares``); FGMRES runs on the
@@ -36,15 +43,16 @@ from typing import cast
 import numpy as np
 import numpy.typing as npt
 import scipy.linalg
+import scipy.sparse
 from mpi4py import MPI
 from petsc4py import PETSc
 
 from common.timing import count
 from solver.dynamics.node_memory import NodeMemory
 from solver.dynamics.shares import Shares
-from solver.dynamics.workspace import Workspace
+from solver.dynamics.workspace import Workspace, transpose
 
-__all__ = ["TractionJacobian"]
+__all__ = ["ReducedFactors", "TractionJacobian", "kernel_basis"]
 
 Solve = Callable[[npt.NDArray], npt.NDArray]
 
@@ -60,6 +68,53 @@ def _flush_subnormal(a: npt.NDArray) -> None:
     for start in range(0, a.shape[0], 256):
         rows = a[start : start + 256]
         rows[np.abs(rows) < 1e-20] = 0.0
+
+
+def kernel_basis(D: npt.NDArray, tol: float = 1e-8) -> tuple[npt.NDArray, npt.NDArray]:
+    """Per point an orthonormal basis Q (|a|, 3, 3) of R^3 whose first columns span the range of
+    D^T and the others the kernel of D (singular values below ``tol`` times the largest), and
+    the mask of the first ones (|a|, 3). D q = 0 for a slipping point's slip direction q, and for
+    both tangents of a point tied only normally; a stuck point (D = I) has no kernel."""
+    _, singular, vt = np.linalg.svd(D)
+    kept = singular > tol * singular[:, :1]
+    return vt.transpose(0, 2, 1).copy(), kept
+
+
+class ReducedFactors:
+    """J_0^-1 from single-precision LU factors of J_0 = I + G_00 D_0 reduced by the kernel of D_0.
+    In each point's basis Q (``kernel_basis``), with k the directions D_0 keeps and z its kernel,
+    Q^T J_0 Q = [[M, 0], [C, I]]: the kernel's columns of G_00 D_0 Q vanish. So J_0^-1 r =
+    Q (a, r_z - C a) with M a = r_k, r_k and r_z the parts of Q^T r, and only M (k x k: 3, 2
+    and 1 rows for a stuck, slipping and normally tied point) is factorised (``lu``: the
+    factors of M^T)."""
+
+    def __init__(
+        self,
+        basis: npt.NDArray,
+        keep: npt.NDArray,
+        null: npt.NDArray,
+        lu: tuple[npt.NDArray, npt.NDArray],
+        couplings: npt.NDArray,
+    ):
+        # Q^T with its rows in the order (k, z), as a sparse matrix
+        order = np.concatenate([keep, null])
+        QT = basis.transpose(0, 2, 1).reshape(-1, 3)[order]
+        columns = 3 * (order // 3)[:, None] + np.arange(3)
+        n = len(order)
+        self.rotation = scipy.sparse.csr_matrix(
+            (QT.ravel(), columns.ravel(), 3 * np.arange(n + 1)), shape=(n, n)
+        )
+        self.k, self.lu, self.couplings = len(keep), lu, couplings
+
+    def solve(self, r: npt.NDArray) -> npt.NDArray:
+        """J_0^-1 r (a vector or columns)."""
+        rotated = self.rotation @ r
+        kept = scipy.linalg.lu_solve(
+            self.lu, rotated[: self.k].astype(np.float32), trans=1, check_finite=False
+        )
+        rotated[self.k :] -= self.couplings @ kept
+        rotated[: self.k] = kept
+        return self.rotation.T @ rotated
 
 
 class _Operator:
@@ -95,7 +150,7 @@ class _Update:
 
     def __init__(
         self,
-        lu: tuple[npt.NDArray, npt.NDArray],
+        solve_0: Solve,
         reference: npt.NDArray,
         D_0: npt.NDArray,
         active: npt.NDArray,
@@ -106,7 +161,7 @@ class _Update:
     ):
         union = np.union1d(reference, active)
         closed = np.setdiff1d(active, reference)
-        self.lu, self.n = lu, 3 * len(union)
+        self.solve_0, self.n = solve_0, 3 * len(union)
         self.at_0 = _dofs(np.searchsorted(union, reference))
         self.at_active = _dofs(np.searchsorted(union, active))
         self.at_closed = _dofs(np.searchsorted(union, closed))
@@ -136,9 +191,7 @@ class _Update:
     def _reference_solve(self, r: npt.NDArray) -> npt.NDArray:
         """R^-1 r for r on U (vector or columns)."""
         z = r.copy()
-        z[self.at_0] = scipy.linalg.lu_solve(
-            self.lu, r[self.at_0].astype(np.float32), check_finite=False
-        )
+        z[self.at_0] = self.solve_0(r[self.at_0])
         if len(self.at_closed):
             z_0 = z[self.at_0]
             Dz_0 = (self.D_0 @ z_0.reshape(len(self.D_0), 3, -1)).reshape(z_0.shape)
@@ -160,7 +213,8 @@ class TractionJacobian:
     """Solves (I + G_aa D_a) dy_a = r for a compliance G (3 np x 3 np) and active points a.
 
     ``G`` is replaced (:meth:`set_compliance`) when the pairing changes; the factors then stay as
-    a preconditioner. Counters: ``factorizations``, ``updates`` and ``krylov_iterations``.
+    a preconditioner. Counters: ``factorizations``, ``updates``, ``krylov_iterations`` and
+    ``dense_solves``; ``factor_rows``: the rows of the last factors.
 
     Args:
         comm: the ranks that share the products (each with the same G and right-hand sides).
@@ -196,14 +250,16 @@ class TractionJacobian:
         self._block: tuple[bytes, npt.NDArray] | None = None  # G_aa^T of the last active set
         self._work = Workspace()  # of G_aa^T
         self._node = NodeMemory(comm)  # of the factors
-        self._lu: tuple[npt.NDArray, npt.NDArray] | None = None  # factors and pivots of J_0
+        self._lu: ReducedFactors | None = None  # the factors of J_0
         self._lu_points = np.zeros(0, dtype=np.int64)  # a_0 and D_0 of the kept factors
         self._lu_D = np.zeros((0, 3, 3))
         # the factors updated to an active set and changed points
         self._update: tuple[tuple[bytes, bytes], _Update] | None = None
         self.factorizations = 0
+        self.factor_rows = 0
         self.updates = 0  #: Woodbury updates of the kept factors to another active set
         self.krylov_iterations = 0
+        self.dense_solves = 0  #: double-precision solves where FGMRES failed with new factors
 
     def set_compliance(self, G: npt.NDArray) -> None:
         """A new G of the same points, or of more points appended to them (the factors are kept
@@ -268,66 +324,95 @@ class TractionJacobian:
             self._block = (key, np.take(picked, cols, axis=1, out=block, mode="clip"))
         return self._block[1]
 
-    def _jacobian(
-        self, active: npt.NDArray, D: npt.NDArray, rows: npt.NDArray, out: npt.NDArray | None = None
-    ) -> npt.NDArray:
-        """J = I + G_aa D (Fortran order) from ``rows`` = G_aa^T (C order), in their precision
-        (in ``out``, n x n in C order, where given)."""
+    def _jacobian(self, active: npt.NDArray, D: npt.NDArray, rows: npt.NDArray) -> npt.NDArray:
+        """J = I + G_aa D (Fortran order) from ``rows`` = G_aa^T (C order), in their precision."""
         n = rows.shape[0]
         # J^T = D^T G_aa^T block row by block row; J in Fortran order is its transpose
         DT = D.transpose(0, 2, 1).astype(rows.dtype)
-        blocks = None if out is None else out.reshape(len(active), 3, n)
-        J = np.matmul(DT, rows.reshape(len(active), 3, n), out=blocks).reshape(n, n).T
+        J = np.matmul(DT, rows.reshape(len(active), 3, n)).reshape(n, n).T
         J[np.diag_indices_from(J)] += 1.0
         return J
 
-    def _factorise(self, active: npt.NDArray, D: npt.NDArray) -> None:
-        """Single-precision LU factors of J = I + G_aa D."""
+    def factorise(self, active: npt.NDArray, D: npt.NDArray) -> ReducedFactors:
+        """New single-precision LU factors of J = I + G_aa D for the active points (sorted),
+        reduced by the kernel of D (``ReducedFactors``), kept as the preconditioner (collective)."""
         rows = self._block_rows(active)
-        n = rows.shape[0]
         node = self._node
-        # once per node, in the memory of the factors it replaces (J^T in C order); the pivots
-        # are each rank's own (SciPy's lu_solve shifts them in place during a solve)
-        factors = node.get("factors", (n, n), np.float32)
-        pivots = np.empty(n, dtype=np.int32)
         node.begin()
+        # the node's first rank's basis for all (the factors are made with it)
+        basis = np.empty((len(active), 3, 3))
+        kept = np.empty((len(active), 3), dtype=np.int8)
         if node.writer:
-            J = self._jacobian(active, D, rows, factors)
-            _flush_subnormal(J.T)
-            with node.threads():
-                lu, pivots[:] = scipy.linalg.lu_factor(J, overwrite_a=True, check_finite=False)
+            basis[:], kept[:] = kernel_basis(D)
+        node.comm.Bcast(basis)
+        node.comm.Bcast(kept)
+        keep, null = np.flatnonzero(kept.ravel()), np.flatnonzero(kept.ravel() == 0)
+        # once per node, in the memory of the factors it replaces (M^T in C order); the pivots
+        # are each rank's own (SciPy's lu_solve shifts them in place during a solve)
+        factors = node.get("factors", (len(keep), len(keep)), np.float32)
+        couplings = node.get("couplings", (len(null), len(keep)), np.float32)
+        pivots = np.empty(len(keep), dtype=np.int32)
+        if node.writer:
+            H = self._rotated(D, basis, keep, rows)
+            np.take(H, keep, axis=0, out=factors, mode="clip")  # M - I, in C order
+            factors[np.diag_indices_from(factors)] += 1.0
+            np.take(H, null, axis=0, out=couplings, mode="clip")
+            _flush_subnormal(factors)
+            _flush_subnormal(couplings)
+            with node.threads():  # factors of M^T (M in C order is M^T in Fortran order)
+                lu, pivots[:] = scipy.linalg.lu_factor(
+                    factors.T, overwrite_a=True, check_finite=False
+                )
             if not np.shares_memory(lu, factors):
-                J[:] = lu
+                factors.T[:] = lu
         node.end()
         node.comm.Bcast(pivots)
-        self._lu = (factors.T, pivots)
+        self._lu = ReducedFactors(basis, keep, null, (factors.T, pivots), couplings)
         self._lu_points, self._lu_D = active.copy(), D.copy()
         self._update = None
         self.factorizations += 1
+        self.factor_rows = len(keep)
         count("traction factorisations")
+        count("traction factor rows", len(keep))
+        return self._lu
 
-    def _factors_solve(self, r: npt.NDArray) -> npt.NDArray:
-        """J_0^-1 r with the kept factors."""
-        return scipy.linalg.lu_solve(self._lu, r.astype(np.float32), check_finite=False)
+    def _rotated(
+        self, D: npt.NDArray, basis: npt.NDArray, keep: npt.NDArray, rows: npt.NDArray
+    ) -> npt.NDArray:
+        """H = Q^T G_aa D Q_k (n x k, C order, single precision) from ``rows`` = G_aa^T (C order)
+        and the points' bases Q (Q_k: the directions kept): G_aa's columns combined point by
+        point, transposed in blocks, then its rows."""
+        points, n, k = len(basis), rows.shape[0], len(keep)
+        DQT = np.matmul(D, basis).transpose(0, 2, 1).astype(np.float32)
+        XT = self._work.get("rotated", (points, 3, n), np.float32)
+        np.matmul(DQT, rows.reshape(points, 3, n), out=XT)  # (G_aa D Q)^T
+        XT_k = self._work.get("kept rows", (k, n), np.float32)
+        np.take(XT.reshape(n, n), keep, axis=0, out=XT_k, mode="clip")
+        X = transpose(XT_k, self._work.get("kept columns", (n, k), np.float32))
+        QT = basis.transpose(0, 2, 1).astype(np.float32)
+        H = self._work.get("reduced", (points, 3, k), np.float32)
+        return np.matmul(QT, X.reshape(points, 3, k), out=H).reshape(n, k)
 
     def _factors(self, active: npt.NDArray, D: npt.NDArray) -> Solve | None:
         """The preconditioner's solve from the kept factors for the active set, or None where
         there are none or too many points changed."""
         if self._lu is None:
             return None
-        lu, reference = self._lu, self._lu_points
+        factors, reference = self._lu, self._lu_points
         kept, in_active, in_reference = np.intersect1d(
             active, reference, assume_unique=True, return_indices=True
         )
         moved = np.linalg.norm(D[in_active] - self._lu_D[in_reference], axis=(1, 2)) > self.turn
         changed = np.union1d(np.setxor1d(active, reference, assume_unique=True), kept[moved])
         if not len(changed):
-            return self._factors_solve
+            return factors.solve
         if len(changed) > self.max_update * len(reference):
             return None
         key = (active.tobytes(), changed.tobytes())
         if self._update is None or self._update[0] != key:
-            update = _Update(lu, reference, self._lu_D, active, D, changed, self._GT32, self.comm)
+            update = _Update(
+                factors.solve, reference, self._lu_D, active, D, changed, self._GT32, self.comm
+            )
             self._update = (key, update)
             self.updates += 1
             count("traction updates")
@@ -373,11 +458,12 @@ class TractionJacobian:
             dy, converged = self._krylov(active, D, r, preconditioner)
             if converged:
                 return dy
-        self._factorise(active, D)
-        dy, converged = self._krylov(active, D, r, self._factors_solve)
+        factors = self.factorise(active, D)
+        dy, converged = self._krylov(active, D, r, factors.solve)
         if not converged:  # J too ill-conditioned for single-precision factors
             cols = _dofs(active)
             J = self._jacobian(active, D, self._GT[np.ix_(cols, cols)])
             dy = scipy.linalg.solve(J, r, check_finite=False)
+            self.dense_solves += 1
             self.comm.Bcast(dy)  # the same on every rank
         return dy

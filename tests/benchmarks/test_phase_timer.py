@@ -24,6 +24,7 @@ def test_inner_tally_matches_the_jacobian_counters():
     assert jacobian.factorizations == 2 and jacobian.updates == 1
     assert dict(timer.inner) == {
         "factorisations": jacobian.factorizations,
+        "factor rows": 3 * 20 + 3 * 12,  # D invertible: no kernel
         "updates": jacobian.updates,
         "krylov": jacobian.krylov_iterations,
     }

@@ -7,8 +7,10 @@
 - The inner problem's linear solves (``TractionJacobian``: FGMRES with kept single-precision
   factors) against a dense double-precision solve, with the factors reused for a changed
   derivative, updated for a few points opening and closing and renewed for another active set;
-  on one rank and with the products shared among the ranks. The inner problem solved with
-  shared products takes the iterates of the one solved on one rank.
+  on one rank and with the products shared among the ranks. The factors of a Jacobian with
+  slipping points and points tied only normally, reduced by the kernel of the law's derivative,
+  against the same dense solve, and the kernel's basis against its definition. The inner
+  problem solved with shared products takes the iterates of the one solved on one rank.
 - The compliance G of ``ContactCompliance`` (blocks once per operator, the master part per
   pairing) against E A'^-1 F^T W formed densely on the tiny joint's condensed zone.
 - The Aitken relaxation of the fixed point in the friction coefficients against linear fixed
@@ -37,7 +39,8 @@ from solver.dynamics.compliance import ContactCompliance
 from solver.dynamics.loads import Schedule
 from solver.dynamics.relaxation import CoefficientRelaxation
 from solver.dynamics.tractions import solve_tractions, traction_residual
-from solver.dynamics.traction_jacobian import TractionJacobian
+from solver.contact.law import derivative
+from solver.dynamics.traction_jacobian import TractionJacobian, kernel_basis
 from solver.dynamics.time_loop import run
 from solver.installation.case import InstallationCase
 from solver.installation.model import attach_vibration, set_up_joint_model
@@ -200,6 +203,48 @@ def test_reused_factors_against_dense_solve(comm):
     other = np.sort(rng.choice(n, 20, replace=False))
     check(other, derivative(other))
     assert jacobian.factorizations == 2
+
+
+@pytest.mark.parametrize("comm", [MPI.COMM_SELF, MPI.COMM_WORLD], ids=["alone", "shared"])
+def test_factors_reduced_by_the_kernel(comm):
+    """The law's derivative at stuck, slipping and normally tied points: its kernel's basis is
+    orthonormal and D vanishes on it (the slip direction; both tangents where tied normally);
+    the factors have 3, 2 and 1 rows per such point and solve J = I + G_aa D to the precision
+    of single-precision factors, alone and as FGMRES's preconditioner."""
+    rng = np.random.default_rng(5)  # the same problems on every rank
+    n, m = 60, 40
+    G = rng.uniform(0.0, 1.0, (3 * n, 3 * n))
+    G = 50.0 * G @ G.T / n
+    active = np.sort(rng.choice(n, m, replace=False))
+    normal = rng.normal(size=(m, 3))
+    normal /= np.linalg.norm(normal, axis=1)[:, None]
+    P_t = rng.normal(size=(m, 3))
+    P_t -= np.einsum("pi,pi->p", P_t, normal)[:, None] * normal
+    stick = np.arange(m) < 10
+    slip = np.arange(m) >= 14  # points 10-13: tied normally only
+    D = derivative(normal, P_t, np.full(m, 0.5), rng.uniform(0.5, 3.0, m), stick, slip)
+    basis, kept = kernel_basis(D)
+    assert np.allclose(basis.transpose(0, 2, 1) @ basis, np.eye(3), atol=1e-12)
+    assert np.array_equal(kept.sum(axis=1), np.where(stick, 3, np.where(slip, 2, 1)))
+    assert np.abs((D @ basis)[np.broadcast_to(~kept[:, None, :], D.shape)]).max() < 1e-12
+    slip_direction = P_t[slip] / np.linalg.norm(P_t[slip], axis=1)[:, None]
+    assert np.allclose(np.abs(np.einsum("pi,pi->p", basis[slip, :, 2], slip_direction)), 1.0)
+
+    jacobian = TractionJacobian(comm, rtol=1e-6)
+    jacobian.set_compliance(G)
+    cols = (3 * active[:, None] + np.arange(3)).ravel()
+    J = np.eye(len(cols)) + G[np.ix_(cols, cols)] @ scipy.linalg.block_diag(*D)
+    r = rng.normal(size=len(cols))
+    dy = jacobian.solve(active, D, r)
+    assert jacobian.factorizations == 1 and jacobian.factor_rows == 3 * 10 + 1 * 4 + 2 * 26
+    assert np.allclose(J @ dy, r, rtol=0, atol=1e-5 * np.abs(r).max())
+    # the factors alone, one FGMRES iteration: J^-1 to the precision of single-precision
+    # factors of M (condition number about 4e3 here), no double-precision solve
+    lu_only = TractionJacobian(comm, max_krylov=1, rtol=1e-3)
+    lu_only.set_compliance(G)
+    dy = lu_only.solve(active, D, r)
+    assert lu_only.factorizations == 1 and lu_only.dense_solves == 0
+    assert np.allclose(J @ dy, r, rtol=0, atol=1e-3 * np.abs(r).max())
 
 
 def _gather_rows(local: np.ndarray) -> np.ndarray:
